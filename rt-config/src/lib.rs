@@ -1,0 +1,11 @@
+//! taut's per-drone configuration (one TOML file per drone), its validation, and the
+//! real-time setup every service applies at start: memory locking, SCHED_FIFO priority,
+//! core pinning, and an absolute-deadline periodic loop with an overrun counter.
+
+mod config;
+pub mod periodic;
+pub mod rt;
+mod validate;
+
+pub use config::*;
+pub use validate::ConfigError;
