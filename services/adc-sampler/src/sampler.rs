@@ -69,12 +69,18 @@ pub struct SamplerCounters {
 
 #[derive(Debug, Clone, Copy)]
 struct Track {
-    /// When the next result is due (learned), ns.
+    /// When to poll next, ns: the predicted finish, or sooner while polling for it.
     next_due_ns: u64,
+    /// When the next conversion should finish by the learned phase and period, ns.
+    predicted_finish_ns: u64,
     /// Learned conversion period of this chip, ns.
     period_ns: f64,
     last_finish_ns: Option<u64>,
     last_poll_ns: u64,
+    /// A poll found no new result since this chip's last one: the next edge will be seen.
+    saw_not_ready: bool,
+    /// How long before the predicted finish polling starts, ns (widened after a missed edge).
+    lead_ns: u64,
     last_code: i16,
     last_conversion_ns: u64,
 }
@@ -95,9 +101,12 @@ impl<I2C: I2c> Sampler<I2C> {
     pub fn new(chips: [Mcp3423<I2C>; 4], general_call: I2C, settings: SamplerSettings) -> Self {
         let track = Track {
             next_due_ns: 0,
+            predicted_finish_ns: 0,
             period_ns: settings.conversion_ns as f64,
             last_finish_ns: None,
             last_poll_ns: 0,
+            saw_not_ready: false,
+            lead_ns: settings.lead_ns,
             last_code: 0,
             last_conversion_ns: 0,
         };
@@ -147,7 +156,8 @@ impl<I2C: I2c> Sampler<I2C> {
             }
         }
         for t in &mut self.tracks {
-            t.next_due_ns = t0 + self.settings.conversion_ns;
+            t.predicted_finish_ns = t0 + self.settings.conversion_ns;
+            t.next_due_ns = t.predicted_finish_ns.saturating_sub(t.lead_ns);
             t.last_poll_ns = t0;
         }
     }
@@ -159,15 +169,19 @@ impl<I2C: I2c> Sampler<I2C> {
         let round_start = clock.now_ns();
         let mut start_ns = None;
         if s.mode == SamplingMode::Synchronous {
+            let before = clock.now_ns();
             let ok = with_retries(s.retries, &mut self.counters, || {
                 mcp3423::general_call_conversion(&mut self.general_call)
             })
             .is_ok();
-            let t0 = clock.now_ns();
+            // The chips start at the general call's stop condition, inside this interval.
+            let t0 = before + (clock.now_ns() - before) / 2;
             start_ns = Some(t0);
             for t in &mut self.tracks {
-                t.next_due_ns = t0 + s.conversion_ns;
+                t.predicted_finish_ns = t0 + s.conversion_ns;
+                t.next_due_ns = t.predicted_finish_ns.saturating_sub(t.lead_ns);
                 t.last_poll_ns = t0;
+                t.saw_not_ready = false;
             }
             if !ok {
                 // No conversion started: the chips will not become ready; the deadline below
@@ -177,43 +191,73 @@ impl<I2C: I2c> Sampler<I2C> {
         // Close the frame a little after the last result is due (never before one nominal
         // period, never after two), so one silent chip cannot stall the others.
         let latest_due = self.tracks.iter().map(|t| t.next_due_ns).max().unwrap_or(0);
-        let deadline = latest_due
-            .clamp(round_start + s.conversion_ns, round_start + 2 * s.conversion_ns)
-            + s.grace_ns;
+        let deadline = latest_due.clamp(
+            round_start + s.conversion_ns,
+            round_start + 2 * s.conversion_ns,
+        ) + s.grace_ns;
 
         let mut pending = [true; 4];
         let mut status = [ChannelStatus::Stale; 4];
-        while let Some(c) = (0..4)
-            .filter(|&c| pending[c])
-            .min_by_key(|&c| self.tracks[c].next_due_ns)
-        {
-            let wake = self.tracks[c].next_due_ns.saturating_sub(s.lead_ns);
+        // Every chip is polled at its predicted edge, also one already collected for this
+        // frame (a newer result replaces the older), so each edge is seen as it happens and
+        // timestamped to within a poll interval. The frame closes when none is pending.
+        while pending.iter().any(|&p| p) {
+            let Some(c) = (0..4)
+                .filter(|&c| status[c] != ChannelStatus::BusError)
+                .min_by_key(|&c| self.tracks[c].next_due_ns)
+            else {
+                break;
+            };
+            let wake = self.tracks[c].next_due_ns;
             if wake >= deadline {
                 break;
             }
             if wake > clock.now_ns() {
                 clock.sleep_until_ns(wake);
             }
-            let result = with_retries(s.retries, &mut self.counters, || self.chips[c].read_ready());
+            // The chip answers with its state at the start of the transfer.
             let now = clock.now_ns();
+            let result = with_retries(s.retries, &mut self.counters, || self.chips[c].read_ready());
             let track = &mut self.tracks[c];
             match result {
                 Ok(Some(reading)) => {
-                    // The conversion finished between the previous poll and this one.
-                    let earliest = track.last_poll_ns.max(now.saturating_sub(track.period_ns as u64));
-                    let finish = earliest + (now - earliest) / 2;
-                    if let Some(prev) = track.last_finish_ns {
-                        let interval = finish.saturating_sub(prev) as f64;
-                        if (0.8..1.25).contains(&(interval / track.period_ns)) {
-                            track.period_ns += 0.1 * (interval - track.period_ns);
+                    let period = (track.period_ns as u64).max(1);
+                    let finish = if track.saw_not_ready {
+                        // The edge lies between the previous poll and this one: learn from it.
+                        let finish = track.last_poll_ns + (now - track.last_poll_ns) / 2;
+                        if let Some(prev) = track.last_finish_ns {
+                            let interval = finish.saturating_sub(prev) as f64;
+                            let periods = (interval / track.period_ns).round().max(1.0);
+                            let one = interval / periods;
+                            if (0.8..1.25).contains(&(one / track.period_ns)) {
+                                track.period_ns += 0.2 * (one - track.period_ns);
+                            }
                         }
-                    }
+                        track.lead_ns = (track.lead_ns * 15 / 16).max(s.lead_ns);
+                        finish
+                    } else {
+                        // Ready at the first poll: the edge was missed. Place it on the learned
+                        // schedule (the newest scheduled finish not after now), learn nothing,
+                        // and start polling earlier next time.
+                        track.lead_ns = (track.lead_ns * 2).min(period / 2);
+                        // (A schedule still ahead of now was merely late: the edge was just now.)
+                        let p = track.predicted_finish_ns;
+                        let newest = if p <= now {
+                            p + (now - p) / period * period
+                        } else {
+                            now
+                        };
+                        newest.max(track.last_poll_ns)
+                    };
+                    track.saw_not_ready = false;
                     track.last_finish_ns = Some(finish);
-                    track.next_due_ns = finish + track.period_ns as u64;
+                    track.predicted_finish_ns = finish + period;
+                    track.next_due_ns = track.predicted_finish_ns.saturating_sub(track.lead_ns);
                     track.last_code = reading.code as i16;
+                    // One-shot: the window opened at the general call, exactly.
                     track.last_conversion_ns = match start_ns {
-                        Some(t0) => t0 + (finish.saturating_sub(t0)) / 2,
-                        None => finish.saturating_sub(track.period_ns as u64 / 2),
+                        Some(t0) => t0 + s.conversion_ns / 2,
+                        None => finish.saturating_sub(period / 2),
                     };
                     status[c] = if reading.saturated {
                         ChannelStatus::Saturated
@@ -224,12 +268,15 @@ impl<I2C: I2c> Sampler<I2C> {
                 }
                 Ok(None) => {
                     self.counters.not_ready_polls += 1;
+                    track.saw_not_ready = true;
                     track.next_due_ns = now + s.poll_interval_ns;
                 }
                 Err(()) => {
                     status[c] = ChannelStatus::BusError;
                     pending[c] = false;
-                    track.next_due_ns = now + track.period_ns as u64;
+                    track.saw_not_ready = false;
+                    track.predicted_finish_ns += track.period_ns as u64;
+                    track.next_due_ns = track.predicted_finish_ns.max(now);
                 }
             }
             track.last_poll_ns = now;
@@ -245,7 +292,10 @@ impl<I2C: I2c> Sampler<I2C> {
             }
         }
 
-        if status.iter().any(|st| matches!(st, ChannelStatus::Stale | ChannelStatus::BusError)) {
+        if status
+            .iter()
+            .any(|st| matches!(st, ChannelStatus::Stale | ChannelStatus::BusError))
+        {
             self.counters.degraded_frames += 1;
         }
         let conversion_ns = self.tracks.map(|t| t.last_conversion_ns);

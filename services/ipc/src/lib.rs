@@ -6,5 +6,5 @@
 mod stop;
 mod topic;
 
-pub use stop::{install_stop_handler, stop_requested, request_stop};
+pub use stop::{install_stop_handler, request_stop, stop_requested};
 pub use topic::{Ipc, IpcError, Stamped, TopicPublisher, TopicSubscriber};

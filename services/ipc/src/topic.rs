@@ -243,6 +243,21 @@ impl<T: Stamped> TopicSubscriber<T> {
         self.drain(&mut f)
     }
 
+    /// Waits up to `timeout` for a wake-up without taking samples (returns at once if some
+    /// are queued).
+    pub fn wait(&self, timeout: Duration) -> Result<(), IpcError> {
+        let queued = self.subscriber.has_samples().unwrap_or(false);
+        if !queued {
+            self.listener
+                .timed_wait(|_| {}, timeout)
+                .map_err(|e| IpcError::Receive {
+                    name: self.name.clone(),
+                    message: format!("event wait: {e:?}"),
+                })?;
+        }
+        Ok(())
+    }
+
     /// Hands every queued sample to `f` without waiting.
     pub fn drain(&self, f: &mut impl FnMut(T)) -> Result<usize, IpcError> {
         let mut n = 0;
@@ -288,10 +303,17 @@ mod tests {
             .wait_and_drain(Duration::from_millis(500), |s| got.push(s.header))
             .unwrap();
         assert_eq!(n, 3);
-        assert_eq!(got.iter().map(|h| h.sequence).collect::<Vec<_>>(), [0, 1, 2]);
+        assert_eq!(
+            got.iter().map(|h| h.sequence).collect::<Vec<_>>(),
+            [0, 1, 2]
+        );
         assert_eq!(got[2].t_origin_ns, 102);
         assert!(got[0].t_publish_ns > 0 && got[0].t_publish_ns <= got[2].t_publish_ns);
         // Nothing more: a timed wait returns empty.
-        assert_eq!(sub.wait_and_drain(Duration::from_millis(10), |_| {}).unwrap(), 0);
+        assert_eq!(
+            sub.wait_and_drain(Duration::from_millis(10), |_| {})
+                .unwrap(),
+            0
+        );
     }
 }

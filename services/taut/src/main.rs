@@ -1,0 +1,85 @@
+//! `taut`: the one binary. Verbs for people (`launch`, `sensor`, `calibrate`, `bench`,
+//! `config check`) and `svc NAME`, the entry of each service process that `launch` starts as
+//! a child of this same executable.
+
+mod bench;
+mod calibrate_cmd;
+mod sensor;
+mod supervisor;
+mod svc;
+
+use clap::{Parser, Subcommand};
+use rt_config::Config;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(
+    name = "taut",
+    version,
+    about = "Tension-aware UAV transport: companion-computer services"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Validate a config and print the effective config (defaults filled in).
+    Config {
+        #[command(subcommand)]
+        action: ConfigAction,
+    },
+    /// Start a drone's services with their real-time settings and supervise them.
+    Launch {
+        #[arg(long)]
+        config: PathBuf,
+    },
+    /// Read the force sensor live (with --sim: the emulated sensor) and summarise.
+    Sensor(sensor::SensorArgs),
+    /// Compute a calibration from recorded frames, or run the paper's procedure on the emulator.
+    Calibrate(calibrate_cmd::CalibrateArgs),
+    /// Benchmarks of the running service set.
+    Bench(bench::BenchArgs),
+    /// Run one service (started by `launch`; not usually typed by hand).
+    Svc(svc::SvcArgs),
+}
+
+#[derive(Subcommand)]
+enum ConfigAction {
+    /// Check FILE and print its effective config.
+    Check { file: PathBuf },
+}
+
+/// Loads `path`, or the embedded simulation config when `None`.
+pub fn load_config(path: Option<&Path>) -> Result<Config, String> {
+    match path {
+        Some(p) => Config::load(p).map_err(|e| e.to_string()),
+        None => Ok(Config::embedded_sim()),
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Config {
+            action: ConfigAction::Check { file },
+        } => load_config(Some(&file)).map(|cfg| {
+            print!("{}", cfg.to_toml());
+            eprintln!("{}: ok", file.display());
+        }),
+        Command::Launch { config } => supervisor::launch(&config),
+        Command::Sensor(args) => sensor::run(&args),
+        Command::Calibrate(args) => calibrate_cmd::run(&args),
+        Command::Bench(args) => bench::run(&args),
+        Command::Svc(args) => svc::run(&args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("taut: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,214 @@
+//! Starts a drone's services as child processes of this executable, reaps and reports deaths,
+//! restarts with backoff or stops all (per config), and stops everything on SIGINT/SIGTERM.
+//! Children get SIGTERM if the supervisor itself dies (PR_SET_PDEATHSIG), and iceoryx2
+//! resources of dead processes are removed on the next start and on shutdown.
+
+use rt_config::{Config, OnDeath, SupervisorConfig};
+use std::os::unix::process::CommandExt;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, ExitStatus};
+use std::time::{Duration, Instant};
+use taut_ipc::{install_stop_handler, stop_requested};
+
+/// One child service: how to start it and its state.
+pub struct ServiceSpec {
+    pub name: String,
+    pub args: Vec<String>,
+}
+
+struct Running {
+    spec: ServiceSpec,
+    child: Option<Child>,
+    started: Instant,
+    restarts: u32,
+    backoff: Duration,
+    restart_at: Option<Instant>,
+}
+
+/// What made [`Supervisor::poll`] decide to stop.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Verdict {
+    Running,
+    /// A service died and policy says stop all (or it died too often).
+    Failed(String),
+}
+
+pub struct Supervisor {
+    exe: PathBuf,
+    cfg: SupervisorConfig,
+    services: Vec<Running>,
+    /// Death reports, for the summary and for tests.
+    pub deaths: Vec<String>,
+}
+
+impl Supervisor {
+    pub fn new(cfg: SupervisorConfig) -> Result<Self, String> {
+        let exe =
+            std::env::current_exe().map_err(|e| format!("cannot find own executable: {e}"))?;
+        Ok(Self {
+            exe,
+            cfg,
+            services: Vec::new(),
+            deaths: Vec::new(),
+        })
+    }
+
+    fn spawn(&self, spec: &ServiceSpec) -> Result<Child, String> {
+        let mut cmd = Command::new(&self.exe);
+        cmd.arg("svc").arg(&spec.name).args(&spec.args);
+        // SAFETY: prctl is async-signal-safe; it only sets this child's parent-death signal.
+        unsafe {
+            cmd.pre_exec(|| {
+                libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGTERM);
+                Ok(())
+            });
+        }
+        cmd.spawn()
+            .map_err(|e| format!("cannot start service {}: {e}", spec.name))
+    }
+
+    /// Starts `spec` now.
+    pub fn start(&mut self, spec: ServiceSpec) -> Result<(), String> {
+        let child = self.spawn(&spec)?;
+        self.services.push(Running {
+            spec,
+            child: Some(child),
+            started: Instant::now(),
+            restarts: 0,
+            backoff: Duration::from_secs_f64(self.cfg.backoff_initial_s),
+            restart_at: None,
+        });
+        Ok(())
+    }
+
+    /// Reaps dead children, schedules or performs restarts. Call every few tens of ms.
+    pub fn poll(&mut self) -> Verdict {
+        let now = Instant::now();
+        for i in 0..self.services.len() {
+            let exited: Option<ExitStatus> = match self.services[i].child.as_mut() {
+                Some(c) => c.try_wait().ok().flatten(),
+                None => None,
+            };
+            if let Some(status) = exited {
+                let s = &mut self.services[i];
+                s.child = None;
+                let report = format!("service {} exited: {status}", s.spec.name);
+                eprintln!("[launch] {report}");
+                self.deaths.push(report.clone());
+                if self.cfg.on_death == OnDeath::StopAll {
+                    return Verdict::Failed(report);
+                }
+                if s.restarts >= self.cfg.max_restarts {
+                    return Verdict::Failed(format!(
+                        "{report}; restarted {} times already (supervisor.max_restarts)",
+                        s.restarts
+                    ));
+                }
+                if s.started.elapsed().as_secs_f64() >= self.cfg.healthy_after_s {
+                    s.backoff = Duration::from_secs_f64(self.cfg.backoff_initial_s);
+                }
+                s.restart_at = Some(now + s.backoff);
+                eprintln!("[launch] restarting {} in {:?}", s.spec.name, s.backoff);
+                s.backoff = (s.backoff * 2).min(Duration::from_secs_f64(self.cfg.backoff_max_s));
+            }
+            let due = self.services[i].restart_at.is_some_and(|t| t <= now);
+            if due {
+                match self.spawn(&self.services[i].spec) {
+                    Ok(child) => {
+                        let s = &mut self.services[i];
+                        s.child = Some(child);
+                        s.started = now;
+                        s.restarts += 1;
+                        s.restart_at = None;
+                    }
+                    Err(e) => return Verdict::Failed(e),
+                }
+            }
+        }
+        Verdict::Running
+    }
+
+    /// SIGTERM to every child, then SIGKILL to those still alive after `grace`; reaps all.
+    pub fn stop_all(&mut self, grace: Duration) {
+        for s in &self.services {
+            if let Some(c) = &s.child {
+                // SAFETY: kill on our own child's pid.
+                unsafe { libc::kill(c.id() as i32, libc::SIGTERM) };
+            }
+        }
+        let deadline = Instant::now() + grace;
+        for s in &mut self.services {
+            if let Some(mut c) = s.child.take() {
+                loop {
+                    match c.try_wait() {
+                        Ok(Some(_)) | Err(_) => break,
+                        Ok(None) if Instant::now() >= deadline => {
+                            eprintln!("[launch] {} ignored SIGTERM; killing it", s.spec.name);
+                            let _ = c.kill();
+                            let _ = c.wait();
+                            break;
+                        }
+                        Ok(None) => std::thread::sleep(Duration::from_millis(10)),
+                    }
+                }
+            }
+        }
+        // Whatever a killed child left in shared memory goes now, not at the next start.
+        if let Ok(ipc) =
+            taut_ipc::Ipc::new(&format!("supervisor-{}", std::process::id()), "", "cleanup")
+        {
+            drop(ipc);
+        }
+    }
+
+    /// Pid of the running instance of service `name`.
+    pub fn pid_of(&self, name: &str) -> Option<u32> {
+        self.services
+            .iter()
+            .find(|s| s.spec.name == name)
+            .and_then(|s| s.child.as_ref().map(|c| c.id()))
+    }
+}
+
+/// The services of one drone, started with `config_path`.
+pub fn drone_services(config_path: &Path) -> Vec<ServiceSpec> {
+    let cfg = config_path.display().to_string();
+    ["adc-sampler", "tension"]
+        .into_iter()
+        .map(|name| ServiceSpec {
+            name: name.to_string(),
+            args: vec!["--config".into(), cfg.clone()],
+        })
+        .collect()
+}
+
+/// `taut launch --config FILE`.
+pub fn launch(config_path: &Path) -> Result<(), String> {
+    let cfg = Config::load(config_path).map_err(|e| e.to_string())?;
+    install_stop_handler();
+    let mut sup = Supervisor::new(cfg.supervisor)?;
+    for spec in drone_services(config_path) {
+        sup.start(spec)?;
+    }
+    eprintln!(
+        "[launch] {}: adc-sampler, tension running (Ctrl-C to stop)",
+        cfg.uav
+    );
+    let verdict = loop {
+        if stop_requested() {
+            break Verdict::Running;
+        }
+        match sup.poll() {
+            Verdict::Running => std::thread::sleep(Duration::from_millis(50)),
+            failed => break failed,
+        }
+    };
+    sup.stop_all(Duration::from_secs(2));
+    match verdict {
+        Verdict::Running => {
+            eprintln!("[launch] stopped cleanly");
+            Ok(())
+        }
+        Verdict::Failed(why) => Err(why),
+    }
+}

@@ -1,0 +1,3 @@
+//! Everything that is not the companion computer: emulated plant, autopilot and sensors.
+
+pub mod sensor;
