@@ -51,7 +51,7 @@ pub enum SamplingMode {
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
 pub struct RawAdcFrame {
-    /// `t_origin_ns` is the mean of the four channels' `conversion_ns`.
+    /// `t_origin_ns` is the mean `conversion_ns` of the channels measured for this frame.
     pub header: Header,
     /// 12-bit two's-complement codes, -2048..=2047; 1 LSB = 1 mV at PGA gain 1.
     pub codes: [i16; 4],

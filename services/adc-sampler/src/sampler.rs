@@ -299,10 +299,15 @@ impl<I2C: I2c> Sampler<I2C> {
             self.counters.degraded_frames += 1;
         }
         let conversion_ns = self.tracks.map(|t| t.last_conversion_ns);
+        // The frame is as old as what was measured for it; a stale channel's old time would
+        // make it look older than it is.
+        let measured = (0..4).filter(|&c| matches!(status[c], ChannelStatus::Fresh | ChannelStatus::Saturated));
+        let (sum, n) = measured.fold((0u64, 0u64), |(s, n), c| (s + conversion_ns[c], n + 1));
+        let t_origin_ns = if n > 0 { sum / n } else { now };
         let frame = RawAdcFrame {
             header: Header {
                 sequence: self.sequence,
-                t_origin_ns: conversion_ns.iter().sum::<u64>() / 4,
+                t_origin_ns,
                 t_publish_ns: 0,
             },
             codes: self.tracks.map(|t| t.last_code),

@@ -162,6 +162,7 @@ impl Supervisor {
     }
 
     /// Pid of the running instance of service `name`.
+    #[cfg(test)]
     pub fn pid_of(&self, name: &str) -> Option<u32> {
         self.services
             .iter()
