@@ -301,7 +301,8 @@ impl<I2C: I2c> Sampler<I2C> {
         let conversion_ns = self.tracks.map(|t| t.last_conversion_ns);
         // The frame is as old as what was measured for it; a stale channel's old time would
         // make it look older than it is.
-        let measured = (0..4).filter(|&c| matches!(status[c], ChannelStatus::Fresh | ChannelStatus::Saturated));
+        let measured = (0..4)
+            .filter(|&c| matches!(status[c], ChannelStatus::Fresh | ChannelStatus::Saturated));
         let (sum, n) = measured.fold((0u64, 0u64), |(s, n), c| (s + conversion_ns[c], n + 1));
         let t_origin_ns = if n > 0 { sum / n } else { now };
         let frame = RawAdcFrame {

@@ -13,9 +13,16 @@ const TAUT: &str = env!("CARGO_BIN_EXE_taut");
 fn children(parent: u32, needle: &str) -> Vec<u32> {
     let mut out = Vec::new();
     for e in std::fs::read_dir("/proc").unwrap().flatten() {
-        let Ok(pid) = e.file_name().to_string_lossy().parse::<u32>() else { continue };
-        let Ok(stat) = std::fs::read_to_string(format!("/proc/{pid}/stat")) else { continue };
-        let ppid = stat.rsplit(')').next().and_then(|r| r.split_whitespace().nth(1));
+        let Ok(pid) = e.file_name().to_string_lossy().parse::<u32>() else {
+            continue;
+        };
+        let Ok(stat) = std::fs::read_to_string(format!("/proc/{pid}/stat")) else {
+            continue;
+        };
+        let ppid = stat
+            .rsplit(')')
+            .next()
+            .and_then(|r| r.split_whitespace().nth(1));
         if ppid != Some(&parent.to_string()) {
             continue;
         }
@@ -68,11 +75,17 @@ fn launch_restarts_a_crashed_service_and_stops_cleanly() {
     std::fs::create_dir_all(&dir).unwrap();
     let socket = dir.join("i2c.sock");
     let uav = format!("launch{id}");
-    let cfg = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../configs/sim-uav1.toml"))
-        .unwrap()
-        .replace("uav = \"uav1\"", &format!("uav = \"{uav}\""))
-        .replace("sim:/tmp/taut-uav1-i2c.sock", &format!("sim:{}", socket.display()))
-        .replace("backoff_initial_s = 0.1", "backoff_initial_s = 0.2");
+    let cfg = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../configs/sim-uav1.toml"
+    ))
+    .unwrap()
+    .replace("uav = \"uav1\"", &format!("uav = \"{uav}\""))
+    .replace(
+        "sim:/tmp/taut-uav1-i2c.sock",
+        &format!("sim:{}", socket.display()),
+    )
+    .replace("backoff_initial_s = 0.1", "backoff_initial_s = 0.2");
     let cfg_path = dir.join("drone.toml");
     std::fs::write(&cfg_path, cfg).unwrap();
 
@@ -82,7 +95,9 @@ fn launch_restarts_a_crashed_service_and_stops_cleanly() {
         .stderr(Stdio::null())
         .spawn()
         .unwrap();
-    wait_for("emulator socket", Duration::from_secs(5), || socket.exists());
+    wait_for("emulator socket", Duration::from_secs(5), || {
+        socket.exists()
+    });
 
     let mut launch = Command::new(TAUT)
         .args(["launch", "--config"])
@@ -94,7 +109,9 @@ fn launch_restarts_a_crashed_service_and_stops_cleanly() {
     wait_for("both services", Duration::from_secs(10), || {
         !children(lp, "adc-sampler").is_empty() && !children(lp, "tension").is_empty()
     });
-    wait_for("their nodes", Duration::from_secs(10), || nodes_named(&uav) == 2);
+    wait_for("their nodes", Duration::from_secs(10), || {
+        nodes_named(&uav) == 2
+    });
 
     // A crash: SIGKILL leaves the sampler's iceoryx2 node behind; the restart cleans it up.
     let first = children(lp, "adc-sampler")[0];
@@ -102,7 +119,9 @@ fn launch_restarts_a_crashed_service_and_stops_cleanly() {
     wait_for("the restarted sampler", Duration::from_secs(10), || {
         children(lp, "adc-sampler").iter().any(|&p| p != first)
     });
-    wait_for("dead node cleanup", Duration::from_secs(10), || nodes_named(&uav) == 2);
+    wait_for("dead node cleanup", Duration::from_secs(10), || {
+        nodes_named(&uav) == 2
+    });
 
     kill(lp, 15);
     let end = Instant::now() + Duration::from_secs(10);
@@ -114,7 +133,12 @@ fn launch_restarts_a_crashed_service_and_stops_cleanly() {
         std::thread::sleep(Duration::from_millis(50));
     };
     let mut log = String::new();
-    launch.stderr.take().unwrap().read_to_string(&mut log).unwrap();
+    launch
+        .stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut log)
+        .unwrap();
     assert!(status.success(), "launch exit {status}: {log}");
     assert!(log.contains("service adc-sampler exited"), "{log}");
     assert!(log.contains("restarting adc-sampler"), "{log}");

@@ -28,7 +28,11 @@ fn hanging_load_reads_within_one_percent_fs_at_240_hz() {
     let v = sensor(&["--load", "0,0,9.81", "--duration", "5"]);
     let m = mean(&v);
     for (k, want) in [0.0, 0.0, 9.81].iter().enumerate() {
-        assert!((m[k] - want).abs() < 0.01 * FS_Z, "axis {k}: {} vs {want}: {v}", m[k]);
+        assert!(
+            (m[k] - want).abs() < 0.01 * FS_Z,
+            "axis {k}: {} vs {want}: {v}",
+            m[k]
+        );
     }
     let rate = v["rate_hz"].as_f64().unwrap();
     assert!((rate - 240.0).abs() < 2.4, "rate {rate}");
@@ -36,9 +40,17 @@ fn hanging_load_reads_within_one_percent_fs_at_240_hz() {
     // A loaded machine may delay a poll past a frame deadline now and then: flagged, rare.
     let samples = v["samples"].as_u64().unwrap();
     assert!(v["flagged"].as_u64().unwrap() * 50 < samples, "{v}");
-    for span in ["adc", "raw_to_tension", "sample_to_tension", "tension_to_monitor"] {
+    for span in [
+        "adc",
+        "raw_to_tension",
+        "sample_to_tension",
+        "tension_to_monitor",
+    ] {
         for p in ["p50", "p99", "p999", "max"] {
-            assert!(v["latency_us"][span][p].as_f64().unwrap() > 0.0, "{span}.{p}: {v}");
+            assert!(
+                v["latency_us"][span][p].as_f64().unwrap() > 0.0,
+                "{span}.{p}: {v}"
+            );
         }
     }
 }
@@ -48,13 +60,24 @@ fn lateral_load_is_read_on_every_axis() {
     let v = sensor(&["--load", "4,-3,12", "--duration", "3"]);
     let m = mean(&v);
     for (k, want) in [4.0, -3.0, 12.0].iter().enumerate() {
-        assert!((m[k] - want).abs() < 0.01 * FS_Z, "axis {k}: {} vs {want}: {v}", m[k]);
+        assert!(
+            (m[k] - want).abs() < 0.01 * FS_Z,
+            "axis {k}: {} vs {want}: {v}",
+            m[k]
+        );
     }
 }
 
 #[test]
 fn a_silent_chip_is_flagged_and_the_chain_keeps_its_rate() {
-    let v = sensor(&["--load", "0,0,9.81", "--duration", "2", "--fault", "silent:2"]);
+    let v = sensor(&[
+        "--load",
+        "0,0,9.81",
+        "--duration",
+        "2",
+        "--fault",
+        "silent:2",
+    ]);
     assert!(v["flags"]["stale_input"].as_u64().unwrap() > 100, "{v}");
     assert!(v["bus_errors"].as_u64().unwrap() > 100, "{v}");
     let rate = v["rate_hz"].as_f64().unwrap();
@@ -63,7 +86,14 @@ fn a_silent_chip_is_flagged_and_the_chain_keeps_its_rate() {
 
 #[test]
 fn synchronous_mode_has_no_skew() {
-    let v = sensor(&["--load", "0,0,9.81", "--duration", "2", "--mode", "synchronous"]);
+    let v = sensor(&[
+        "--load",
+        "0,0,9.81",
+        "--duration",
+        "2",
+        "--mode",
+        "synchronous",
+    ]);
     assert!(v["skew_us"]["p50"].as_f64().unwrap() < 50.0, "{v}");
     assert!((v["mean_force_n"][2].as_f64().unwrap() - 9.81).abs() < 0.01 * FS_Z);
 }
@@ -74,12 +104,24 @@ fn config_check_names_the_bad_key() {
     std::fs::create_dir_all(&dir).unwrap();
     let good = dir.join("good.toml");
     std::fs::write(&good, rt_config_text()).unwrap();
-    let out = Command::new(TAUT).args(["config", "check"]).arg(&good).output().unwrap();
+    let out = Command::new(TAUT)
+        .args(["config", "check"])
+        .arg(&good)
+        .output()
+        .unwrap();
     assert!(out.status.success());
     assert!(String::from_utf8_lossy(&out.stdout).contains("window = 4"));
     let bad = dir.join("bad.toml");
-    std::fs::write(&bad, rt_config_text().replace("window = 4", "window = 4\nwindow_s = 1")).unwrap();
-    let out = Command::new(TAUT).args(["config", "check"]).arg(&bad).output().unwrap();
+    std::fs::write(
+        &bad,
+        rt_config_text().replace("window = 4", "window = 4\nwindow_s = 1"),
+    )
+    .unwrap();
+    let out = Command::new(TAUT)
+        .args(["config", "check"])
+        .arg(&bad)
+        .output()
+        .unwrap();
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("window_s"), "{err}");
@@ -87,6 +129,9 @@ fn config_check_names_the_bad_key() {
 }
 
 fn rt_config_text() -> String {
-    std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../configs/sim-uav1.toml"))
-        .unwrap()
+    std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../configs/sim-uav1.toml"
+    ))
+    .unwrap()
 }
