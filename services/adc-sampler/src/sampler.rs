@@ -286,9 +286,9 @@ impl<I2C: I2c> Sampler<I2C> {
         }
         // Chips still pending are stale; look for them again one period on.
         let now = clock.now_ns();
-        for c in 0..4 {
-            if pending[c] && self.tracks[c].next_due_ns <= now {
-                self.tracks[c].next_due_ns = now + s.poll_interval_ns;
+        for (track, _) in self.tracks.iter_mut().zip(pending).filter(|(_, p)| *p) {
+            if track.next_due_ns <= now {
+                track.next_due_ns = now + s.poll_interval_ns;
             }
         }
 
@@ -304,7 +304,7 @@ impl<I2C: I2c> Sampler<I2C> {
         let measured = (0..4)
             .filter(|&c| matches!(status[c], ChannelStatus::Fresh | ChannelStatus::Saturated));
         let (sum, n) = measured.fold((0u64, 0u64), |(s, n), c| (s + conversion_ns[c], n + 1));
-        let t_origin_ns = if n > 0 { sum / n } else { now };
+        let t_origin_ns = sum.checked_div(n).unwrap_or(now);
         let frame = RawAdcFrame {
             header: Header {
                 sequence: self.sequence,

@@ -52,6 +52,13 @@ const MAX_PUBLISHERS: usize = 2;
 const MAX_NODES: usize = 16;
 const SUBSCRIBER_BUFFER: usize = 16;
 
+/// A topic's name, its publish-subscribe service and its event service.
+type TopicServices<T> = (
+    String,
+    publish_subscribe::PortFactory<ipc::Service, T, ()>,
+    event::PortFactory<ipc::Service>,
+);
+
 /// A process's iceoryx2 node and the naming of its drone's topics.
 pub struct Ipc {
     node: Node<ipc::Service>,
@@ -85,17 +92,7 @@ impl Ipc {
         names::service_name(&self.root, &self.uav, topic)
     }
 
-    fn open<T: Stamped>(
-        &self,
-        topic: &str,
-    ) -> Result<
-        (
-            String,
-            publish_subscribe::PortFactory<ipc::Service, T, ()>,
-            event::PortFactory<ipc::Service>,
-        ),
-        IpcError,
-    > {
+    fn open<T: Stamped>(&self, topic: &str) -> Result<TopicServices<T>, IpcError> {
         let name = self.service_name(topic);
         let sn: ServiceName = name.as_str().try_into().map_err(|e| IpcError::Name {
             name: name.clone(),

@@ -38,20 +38,17 @@ pub fn run(args: &CalibrateArgs) -> Result<(), String> {
                 samples_per_step: args.samples_per_step,
                 ..SyntheticOptions::default()
             },
-            config.clone(),
+            config,
             args.out.clone(),
         ),
         _ => return Err("give --recording FILE or --synthetic".into()),
     };
     let outcome = calibrate::run(&opts).map_err(|e| e.to_string())?;
-    let whole = calibrate::write_config_with_calibration(&config, &outcome.calibration);
-    let whole_path = args.out.join("config-calibrated.toml");
-    std::fs::write(&whole_path, whole).map_err(|e| format!("{}: {e}", whole_path.display()))?;
     let report = args.out.join("report.md");
     if let Ok(md) = std::fs::read_to_string(&report) {
         println!("{md}");
     }
-    for f in outcome.files.iter().chain([&whole_path]) {
+    for f in &outcome.files {
         eprintln!("wrote {}", f.display());
     }
     if outcome.font.is_none() {

@@ -160,15 +160,6 @@ impl Supervisor {
             drop(ipc);
         }
     }
-
-    /// Pid of the running instance of service `name`.
-    #[cfg(test)]
-    pub fn pid_of(&self, name: &str) -> Option<u32> {
-        self.services
-            .iter()
-            .find(|s| s.spec.name == name)
-            .and_then(|s| s.child.as_ref().map(|c| c.id()))
-    }
 }
 
 /// The services of one drone, started with `config_path`.

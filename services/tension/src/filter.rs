@@ -47,15 +47,15 @@ impl<const N: usize> MovingAverage<N> {
     pub fn push(&mut self, x: [f64; N]) -> [f64; N] {
         if self.len == self.window {
             let old = self.ring[self.head];
-            for k in 0..N {
-                self.sum[k] -= old[k];
+            for (s, o) in self.sum.iter_mut().zip(old) {
+                *s -= o;
             }
         } else {
             self.len += 1;
         }
         self.ring[self.head] = x;
-        for k in 0..N {
-            self.sum[k] += x[k];
+        for (s, v) in self.sum.iter_mut().zip(x) {
+            *s += v;
         }
         self.head = (self.head + 1) % self.window;
         // Running sums drift by rounding over millions of samples: re-add now and then.
@@ -64,8 +64,8 @@ impl<const N: usize> MovingAverage<N> {
             self.pushes_since_resum = 0;
             self.sum = [0.0; N];
             for v in &self.ring[..self.len] {
-                for k in 0..N {
-                    self.sum[k] += v[k];
+                for (s, x) in self.sum.iter_mut().zip(v) {
+                    *s += x;
                 }
             }
         }
