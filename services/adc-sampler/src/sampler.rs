@@ -132,13 +132,10 @@ impl<I2C: I2c> Sampler<I2C> {
     /// fatal: a chip that missed its configuration shows up as stale or a bus error later.
     pub fn start(&mut self, clock: &mut impl Clock) {
         let retries = self.settings.retries;
-        if with_retries(retries, &mut self.counters, || {
+        // A failed reset is counted; chips that missed it show up as stale or bus errors.
+        let _ = with_retries(retries, &mut self.counters, || {
             mcp3423::general_call_reset(&mut self.general_call)
-        })
-        .is_err()
-        {
-            // Chips keep whatever they ran; configure them one by one below.
-        }
+        });
         let t0 = clock.now_ns();
         let cfg = ChipConfig {
             mode: match self.settings.mode {
@@ -170,10 +167,11 @@ impl<I2C: I2c> Sampler<I2C> {
         let mut start_ns = None;
         if s.mode == SamplingMode::Synchronous {
             let before = clock.now_ns();
-            let ok = with_retries(s.retries, &mut self.counters, || {
+            // If no conversion starts, the chips never become ready: the deadline below marks
+            // them stale and the next frame tries again.
+            let _ = with_retries(s.retries, &mut self.counters, || {
                 mcp3423::general_call_conversion(&mut self.general_call)
-            })
-            .is_ok();
+            });
             // The chips start at the general call's stop condition, inside this interval.
             let t0 = before + (clock.now_ns() - before) / 2;
             start_ns = Some(t0);
@@ -182,10 +180,6 @@ impl<I2C: I2c> Sampler<I2C> {
                 t.next_due_ns = t.predicted_finish_ns.saturating_sub(t.lead_ns);
                 t.last_poll_ns = t0;
                 t.saw_not_ready = false;
-            }
-            if !ok {
-                // No conversion started: the chips will not become ready; the deadline below
-                // marks them stale and the next frame tries again.
             }
         }
         // Close the frame a little after the last result is due (never before one nominal

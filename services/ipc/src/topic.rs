@@ -74,6 +74,8 @@ impl Ipc {
             name: node_name.to_string(),
             message,
         };
+        // iceoryx2 warns on every start that it runs on its built-in defaults, which we intend.
+        set_log_level(LogLevel::Error);
         let name: NodeName = node_name.try_into().map_err(|e| err(format!("{e:?}")))?;
         let node = NodeBuilder::new()
             .name(&name)
@@ -86,6 +88,12 @@ impl Ipc {
             root: root.to_string(),
             uav: uav.to_string(),
         })
+    }
+
+    /// Removes what crashed processes left in shared memory, from a short-lived node of its
+    /// own (a supervisor calls this after stopping its children).
+    pub fn cleanup_dead_nodes(node_name: &str) -> Result<(), IpcError> {
+        Self::new(node_name, "", "cleanup").map(drop)
     }
 
     pub fn service_name(&self, topic: &str) -> String {
@@ -186,7 +194,7 @@ impl<T: Stamped> TopicPublisher<T> {
     pub fn publish(&mut self, mut sample: T) -> Result<Header, IpcError> {
         let h = sample.header_mut();
         h.sequence = self.sequence;
-        h.t_publish_ns = shared_types::monotonic_ns();
+        h.t_publish_ns = rt_config::periodic::now_ns();
         let header = *h;
         self.sequence += 1;
         let send_err = |message: String| IpcError::Send {
@@ -227,16 +235,7 @@ impl<T: Stamped> TopicSubscriber<T> {
         timeout: Duration,
         mut f: impl FnMut(T),
     ) -> Result<usize, IpcError> {
-        let n = self.drain(&mut f)?;
-        if n > 0 {
-            return Ok(n);
-        }
-        self.listener
-            .timed_wait(|_| {}, timeout)
-            .map_err(|e| IpcError::Receive {
-                name: self.name.clone(),
-                message: format!("event wait: {e:?}"),
-            })?;
+        self.wait(timeout)?;
         self.drain(&mut f)
     }
 

@@ -72,22 +72,7 @@ pub fn run(args: &BenchArgs) -> Result<(), String> {
             "mode {}, {} samples at {:.2} Hz",
             summary.mode, summary.samples, summary.rate_hz
         );
-        println!(
-            "{:<20} {:>8} {:>9} {:>9} {:>9} {:>9}",
-            "span (us)", "count", "p50", "p99", "p99.9", "max"
-        );
-        for (name, p) in &summary.latency_us {
-            println!(
-                "{name:<20} {:>8} {:>9.1} {:>9.1} {:>9.1} {:>9.1}",
-                p.count, p.p50, p.p99, p.p999, p.max
-            );
-        }
-        if let Some(k) = summary.skew_us {
-            println!(
-                "{:<20} {:>8} {:>9.1} {:>9.1} {:>9.1} {:>9.1}",
-                "channel_skew", k.count, k.p50, k.p99, k.p999, k.max
-            );
-        }
+        sensor::print_spans(&summary);
     }
     Ok(())
 }

@@ -145,6 +145,11 @@ fn print_table(s: &SensorSummary) {
         "bus errors {}, degraded frames {}, lost samples {}",
         s.bus_errors, s.degraded_frames, s.lost_samples
     );
+    print_spans(s);
+}
+
+/// The latency table: one row per span, and the channel skew.
+pub fn print_spans(s: &SensorSummary) {
     println!(
         "{:<20} {:>8} {:>9} {:>9} {:>9} {:>9}",
         "span (us)", "count", "p50", "p99", "p99.9", "max"

@@ -154,10 +154,9 @@ impl Supervisor {
             }
         }
         // Whatever a killed child left in shared memory goes now, not at the next start.
-        if let Ok(ipc) =
-            taut_ipc::Ipc::new(&format!("supervisor-{}", std::process::id()), "", "cleanup")
-        {
-            drop(ipc);
+        let node = format!("supervisor-{}", std::process::id());
+        if let Err(e) = taut_ipc::Ipc::cleanup_dead_nodes(&node) {
+            eprintln!("[launch] iceoryx2 cleanup: {e}");
         }
     }
 }

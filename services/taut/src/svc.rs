@@ -193,7 +193,8 @@ fn run_tension(cfg: &Config) -> Result<(), String> {
                 errors += 1;
             }
         });
-        if r.is_err() {
+        // A stop signal interrupts the wait: that is not an error.
+        if r.is_err() && !stop_requested() {
             errors += 1;
         }
     }
