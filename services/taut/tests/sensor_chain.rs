@@ -2,12 +2,20 @@
 
 use serde_json::Value;
 use std::process::Command;
+use std::sync::Mutex;
 
 const TAUT: &str = env!("CARGO_BIN_EXE_taut");
 /// Full scale on z: 5.5 kg-force (the paper's tested range).
 const FS_Z: f64 = 5.5 * 9.80665;
 
+/// The chains measure rate and latency, and the embedded config pins every service to core 1
+/// at SCHED_FIFO: run one chain at a time so tests do not measure each other.
+static ONE_CHAIN_AT_A_TIME: Mutex<()> = Mutex::new(());
+
 fn sensor(args: &[&str]) -> Value {
+    let _one = ONE_CHAIN_AT_A_TIME
+        .lock()
+        .unwrap_or_else(|e| e.into_inner());
     let out = Command::new(TAUT)
         .args(["sensor", "--sim", "--json"])
         .args(args)
