@@ -10,5 +10,7 @@
 
 pub mod names;
 mod samples;
+mod truth;
 
 pub use samples::*;
+pub use truth::*;

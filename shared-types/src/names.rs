@@ -6,6 +6,11 @@ pub const RAW_ADC: &str = "raw_adc";
 /// Topic of [`crate::TensionSample`]s from the tension stage.
 pub const TENSION: &str = "tension";
 
+/// Topic of [`crate::PlantTruth`] under the uav id [`PLANT`]; evaluation only.
+pub const TRUTH: &str = "truth";
+/// The "uav" id the plant publishes under.
+pub const PLANT: &str = "plant";
+
 /// Longest service name we build (iceoryx2 allows 255 bytes).
 pub const MAX_NAME_LEN: usize = 255;
 

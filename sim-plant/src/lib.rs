@@ -5,6 +5,7 @@
 //! - [`commander`]: PX4's modes, arming, offboard proof of life and failsafe.
 //! - [`estimator`]: the motion-capture perturbation and the EKF-like position estimator.
 //! - [`mavlink_link`]: the MAVLink v2 endpoint of each emulated PX4 (UDP, loopback).
+//! - [`scenario`]: scenario files (Test A, Test B) and setpoint paths.
 //! - [`sensor`]: the emulated force sensor and its I2C bus.
 
 pub mod commander;
@@ -12,4 +13,5 @@ pub mod estimator;
 pub mod inner_loops;
 pub mod mavlink_link;
 pub mod physics;
+pub mod scenario;
 pub mod sensor;

@@ -1,7 +1,7 @@
 use core::time::Duration;
 use iceoryx2::prelude::*;
 use iceoryx2::service::port_factory::{event, publish_subscribe};
-use shared_types::{names, Header, RawAdcFrame, TensionSample};
+use shared_types::{names, Header, PlantTruth, RawAdcFrame, TensionSample};
 use std::fmt::Debug;
 
 /// Samples whose header the publisher stamps.
@@ -10,23 +10,21 @@ pub trait Stamped: Copy + Debug + ZeroCopySend + 'static {
     fn header_mut(&mut self) -> &mut Header;
 }
 
-impl Stamped for RawAdcFrame {
-    fn header(&self) -> &Header {
-        &self.header
-    }
-    fn header_mut(&mut self) -> &mut Header {
-        &mut self.header
-    }
+/// Every sample type starts with a `header: Header` field.
+macro_rules! impl_stamped {
+    ($($t:ty),* $(,)?) => {$(
+        impl Stamped for $t {
+            fn header(&self) -> &Header {
+                &self.header
+            }
+            fn header_mut(&mut self) -> &mut Header {
+                &mut self.header
+            }
+        }
+    )*};
 }
 
-impl Stamped for TensionSample {
-    fn header(&self) -> &Header {
-        &self.header
-    }
-    fn header_mut(&mut self) -> &mut Header {
-        &mut self.header
-    }
-}
+impl_stamped!(RawAdcFrame, TensionSample, PlantTruth);
 
 /// One error enum for the plumbing; each variant names the service it failed on.
 #[derive(Debug, thiserror::Error)]
