@@ -265,7 +265,7 @@ impl Scenario {
                         "no drone has this id",
                     ));
                 }
-                if p.segments.iter().any(|s| !(s.duration_s() >= 0.0)) {
+                if p.segments.iter().any(|s| !s.duration_s().is_finite() || s.duration_s() < 0.0) {
                     return Err(self.invalid(
                         format!("phases[{i}].paths[{j}].segments"),
                         format!("{:?}", p.segments),

@@ -111,7 +111,7 @@ impl Path {
             velocity_ned_m_s: Vector3::zeros(),
             acceleration_ned_m_s2: Vector3::zeros(),
         };
-        if !(t_s >= 0.0) {
+        if t_s.is_nan() || t_s < 0.0 {
             return still(self.start);
         }
         // The last segment that has started (a step at time t counts as started).
