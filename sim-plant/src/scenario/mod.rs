@@ -2,11 +2,12 @@
 //! and each drone's setpoint path per mission phase. `scenarios/test-a.toml` and
 //! `scenarios/test-b.toml` (the paper's Test A and Test B) are built in.
 //!
-//! A phase ends (in the mission, and in the plant's own [`crate::pilot`]) when every path of the
+//! A phase ends (in the mission, and in the plant's own pilot; see [`PhaseTracker`]) when every path of the
 //! phase has run to its end and both drones have stayed within `tolerance_m` of their setpoints
 //! for `settle_s`; `timeout_s` bounds it.
 
 mod path;
+mod tracker;
 
 use std::path::Path as FsPath;
 
@@ -14,6 +15,7 @@ use nalgebra::Vector3;
 use serde::Deserialize;
 
 pub use path::{Path, PathSample, Segment};
+pub use tracker::{PhaseEvent, PhaseTracker, Readiness};
 
 /// Test A, payload drop (paper VI).
 pub const TEST_A: &str = include_str!("../../../scenarios/test-a.toml");
@@ -265,7 +267,10 @@ impl Scenario {
                         "no drone has this id",
                     ));
                 }
-                if p.segments.iter().any(|s| !s.duration_s().is_finite() || s.duration_s() < 0.0) {
+                if p.segments
+                    .iter()
+                    .any(|s| !s.duration_s().is_finite() || s.duration_s() < 0.0)
+                {
                     return Err(self.invalid(
                         format!("phases[{i}].paths[{j}].segments"),
                         format!("{:?}", p.segments),

@@ -116,3 +116,37 @@ fn errors_name_the_key() {
     let text = super::TEST_A.replace("kind = \"move\"", "kind = \"hover\"");
     assert!(Scenario::from_toml_str("x", &text).is_err());
 }
+
+#[test]
+fn tracker_ends_a_phase_only_after_both_settle() {
+    let a = Scenario::load("test-a").unwrap();
+    let mut tr = PhaseTracker::new(&a, 0.0);
+    let top = [
+        tr.setpoint(0, 100.0).position_ned_m,
+        tr.setpoint(1, 100.0).position_ned_m,
+    ];
+    // Path still running at 2 s: not ready even when on the setpoint.
+    let on_path = [
+        tr.setpoint(0, 2.0).position_ned_m,
+        tr.setpoint(1, 2.0).position_ned_m,
+    ];
+    assert_eq!(tr.update(2.0, &on_path), PhaseEvent::Running);
+    // Both at the top from 4 s; one drone 0.31 m off until 4.5 s.
+    let off = [top[0] + Vector3::new(0.31, 0.0, 0.0), top[1]];
+    assert_eq!(tr.update(4.0, &off), PhaseEvent::Running);
+    assert_eq!(tr.update(4.5, &top), PhaseEvent::Running);
+    assert_eq!(tr.update(5.49, &top), PhaseEvent::Running);
+    assert_eq!(tr.update(5.5, &top), PhaseEvent::Ended { finished: 0 });
+    assert_eq!(tr.phase(), 1);
+    assert_eq!(tr.phase_starts_s()[1], 5.5);
+    // The move phase's setpoint is the step target at once.
+    assert!(close(
+        tr.setpoint(0, 5.5).position_ned_m,
+        [-1.0, -0.8, -2.1],
+        1e-12
+    ));
+    // Timeout after 25 s in the phase.
+    assert_eq!(tr.update(30.4, &top), PhaseEvent::Running);
+    assert_eq!(tr.update(30.6, &top), PhaseEvent::TimedOut { phase: 1 });
+    assert!(tr.timed_out());
+}
