@@ -23,7 +23,7 @@ const COMMAND_LONG_ID: u32 = 76;
 const MAX_DATAGRAM: usize = 65_536;
 
 /// Link statistics; every dropped byte or frame lands in exactly one rx counter.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
 pub struct LinkCounters {
     /// Datagrams received.
     pub rx_datagrams: u64,
