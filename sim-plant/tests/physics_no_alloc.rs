@@ -59,5 +59,5 @@ fn stepping_does_not_allocate() {
         allocated, 0,
         "step or a reading allocated {allocated} times"
     );
-    assert_eq!(w.rejected_step_count(), 4000);
+    assert_eq!(w.rejected_input_count(), 4000);
 }

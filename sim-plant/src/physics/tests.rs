@@ -110,10 +110,10 @@ fn bad_steps_are_ignored_and_counted() {
     for dt in [0.0, -1.0, f64::NAN, f64::INFINITY, 1e6] {
         w.step(dt, &cmd);
     }
-    assert_eq!(w.rejected_step_count(), 5);
+    assert_eq!(w.rejected_input_count(), 5);
     assert_eq!(*w.state(), f.state);
     w.set_external_force(BodyId::Payload, Vector3::new(f64::NAN, 0.0, 0.0));
-    assert_eq!(w.rejected_step_count(), 6);
+    assert_eq!(w.rejected_input_count(), 6);
     assert_eq!(w.external_force(BodyId::Payload), Vector3::zeros());
 }
 

@@ -59,7 +59,7 @@ pub struct World {
     pub(crate) last_accel_ned: [Vector3<f64>; 3],
     motor_decay: MotorDecay,
     nan_commands: u64,
-    rejected_steps: u64,
+    rejected_inputs: u64,
     non_finite_steps: u64,
 }
 
@@ -111,7 +111,7 @@ impl World {
             last_accel_ned: [Vector3::zeros(); 3],
             motor_decay: MotorDecay::default(),
             nan_commands: 0,
-            rejected_steps: 0,
+            rejected_inputs: 0,
             non_finite_steps: 0,
         };
         world.update_anchors();
@@ -123,12 +123,12 @@ impl World {
     /// Commands are clamped to [0, max]; NaN counts as 0 and is counted
     /// ([`World::nan_command_count`]). A `dt_s` that is not finite and positive, or that would
     /// need more than [`MAX_SUBSTEPS_PER_STEP`] sub-steps, is ignored and counted
-    /// ([`World::rejected_step_count`]). If the state came out non-finite the step is undone
+    /// ([`World::rejected_input_count`]). If the state came out non-finite the step is undone
     /// and counted ([`World::non_finite_step_count`]).
     pub fn step(&mut self, dt_s: f64, rotor_cmd: &[[f64; 4]; 2]) {
         let substeps = (dt_s / self.params.max_substep_s).ceil();
         if !(dt_s.is_finite() && dt_s > 0.0) || substeps > MAX_SUBSTEPS_PER_STEP as f64 {
-            self.rejected_steps += 1;
+            self.rejected_inputs += 1;
             return;
         }
         let substeps = (substeps as usize).max(1);
@@ -316,7 +316,7 @@ impl World {
         if force_ned.iter().all(|v| v.is_finite()) {
             self.external_force_ned[body.index()] = force_ned;
         } else {
-            self.rejected_steps += 1;
+            self.rejected_inputs += 1;
         }
     }
 
@@ -341,8 +341,8 @@ impl World {
     }
 
     /// Ignored calls: bad `dt_s` in `step`, non-finite force in `set_external_force`.
-    pub fn rejected_step_count(&self) -> u64 {
-        self.rejected_steps
+    pub fn rejected_input_count(&self) -> u64 {
+        self.rejected_inputs
     }
 
     /// Steps undone because the state came out non-finite.
