@@ -140,14 +140,14 @@ fn white_noise_is_smoothed_and_velocity_is_unbiased() {
             120.0,
             5.0,
         );
-        for axis in 0..3 {
+        for (axis, raw_std) in raw.iter().enumerate() {
             let (_, p_std) = mean_std(&r.pos_err, axis);
             let (v_mean, v_std) = mean_std(&r.vel_err, axis);
-            let ratio = p_std / raw[axis];
+            let ratio = p_std / raw_std;
             println!(
                 "{label}, axis {axis}: position error std {p_std:.4} m = {ratio:.3} x raw {}; \
                  velocity error mean {v_mean:+.4} std {v_std:.4} m/s",
-                raw[axis]
+                raw_std
             );
             assert!(ratio < 0.5, "axis {axis}: ratio {ratio}");
             assert!(
