@@ -132,7 +132,15 @@ impl ScenarioPilot {
         }
     }
 
-    fn fly<V: Vehicles>(&mut self, v: &mut V, k: usize, tel: &Telemetry, now: u64, t_s: f64, dt: f64) {
+    fn fly<V: Vehicles>(
+        &mut self,
+        v: &mut V,
+        k: usize,
+        tel: &Telemetry,
+        now: u64,
+        t_s: f64,
+        dt: f64,
+    ) {
         // Before the phases run (handshake), hold the start point.
         let sp = if self.phases_started {
             let s = self.tracker.setpoint(k, t_s);
@@ -144,7 +152,10 @@ impl ScenarioPilot {
                 yaw_rate_rad_s: 0.0,
             }
         } else {
-            TrajectorySetpoint::position(self.tracker.setpoint(k, 0.0).position_ned_m, self.yaw_rad[k])
+            TrajectorySetpoint::position(
+                self.tracker.setpoint(k, 0.0).position_ned_m,
+                self.yaw_rad[k],
+            )
         };
         let armed = tel.base_mode & MAV_MODE_FLAG_SAFETY_ARMED != 0;
         self.position[k].set_landed(!armed);

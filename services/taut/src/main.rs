@@ -4,6 +4,7 @@
 
 mod bench;
 mod calibrate_cmd;
+mod plant_cmd;
 mod sensor;
 mod supervisor;
 mod svc;
@@ -40,6 +41,8 @@ enum Command {
     Sensor(sensor::SensorArgs),
     /// Compute a calibration from recorded frames, or run the paper's procedure on the emulator.
     Calibrate(calibrate_cmd::CalibrateArgs),
+    /// The plant alone: two simulated drones with emulated PX4 (MAVLink) and force sensors.
+    Plant(plant_cmd::PlantArgs),
     /// Benchmarks of the running service set.
     Bench(bench::BenchArgs),
     /// Run one service (started by `launch`; not usually typed by hand).
@@ -72,6 +75,7 @@ fn main() -> ExitCode {
         Command::Launch { config } => supervisor::launch(&config),
         Command::Sensor(args) => sensor::run(&args),
         Command::Calibrate(args) => calibrate_cmd::run(&args),
+        Command::Plant(args) => plant_cmd::run(&args),
         Command::Bench(args) => bench::run(&args),
         Command::Svc(args) => svc::run(&args),
     };

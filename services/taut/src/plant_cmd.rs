@@ -10,8 +10,8 @@ use rt_config::periodic::{now_ns, PeriodicLoop};
 use serde::Serialize;
 use shared_types::{names, PlantTruth};
 use sim_plant::mavlink_link::{LinkConfig, LinkCounters, MavlinkEndpoint};
-use sim_plant::plant::{Plant, PlantConfig};
 use sim_plant::pilot::ScenarioPilot;
+use sim_plant::plant::{Plant, PlantConfig};
 use sim_plant::scenario::Scenario;
 use sim_plant::sensor::{BusConfig, BusServer, LoadProfile, SensorBus, SensorModel, SensorParams};
 use std::net::SocketAddr;
@@ -98,10 +98,13 @@ pub fn run(args: &PlantArgs) -> Result<(), String> {
     cfg.seed = args.seed;
     cfg.perturbation_enabled = !args.no_noise;
     if args.fast {
-        let report = sim_plant::fast::run(&scenario, &cfg, args.duration)
-            .map_err(|e| e.to_string())?;
+        let report =
+            sim_plant::fast::run(&scenario, &cfg, args.duration).map_err(|e| e.to_string())?;
         if args.json {
-            println!("{}", serde_json::to_string_pretty(&report).unwrap_or_default());
+            println!(
+                "{}",
+                serde_json::to_string_pretty(&report).unwrap_or_default()
+            );
         } else {
             println!("{report}");
         }
@@ -114,7 +117,10 @@ pub fn run(args: &PlantArgs) -> Result<(), String> {
     install_stop_handler();
     let report = run_real_time(args, &scenario, &cfg)?;
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&report).unwrap_or_default());
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&report).unwrap_or_default()
+        );
     } else {
         print_report(&report);
     }
@@ -240,7 +246,12 @@ fn run_real_time(
     let mut truth_pub = ipc
         .publisher::<PlantTruth>(names::TRUTH)
         .map_err(|e| e.to_string())?;
-    let mut pilot = args.pilot.then(|| ScenarioPilot::new(scenario, cfg));
+    let mut pilot = match args.pilot {
+        true => Some(
+            ScenarioPilot::new(scenario, &cfg.inner_loops.position).map_err(|e| e.to_string())?,
+        ),
+        false => None,
+    };
 
     for (i, d) in scenario.drones.iter().enumerate() {
         let c = link_config(args, i);
@@ -260,7 +271,11 @@ fn run_real_time(
         ipc.service_name(names::TRUTH),
         scenario.name,
         args.seed,
-        if cfg.perturbation_enabled { "on" } else { "off" }
+        if cfg.perturbation_enabled {
+            "on"
+        } else {
+            "off"
+        }
     );
 
     let tick_ns = args.tick_us.max(100) * 1000;
@@ -276,7 +291,11 @@ fn run_real_time(
     loop {
         let tick = lp.wait();
         ticks += 1;
-        spans.record_span("jitter", tick.deadline_ns, tick.deadline_ns + tick.lateness_ns);
+        spans.record_span(
+            "jitter",
+            tick.deadline_ns,
+            tick.deadline_ns + tick.lateness_ns,
+        );
         let now = now_ns();
         if stop_requested() || end_ns.is_some_and(|e| now >= e) {
             break;

@@ -165,6 +165,16 @@ impl LandDetector {
         }
     }
 
+    /// The detector of a vehicle already flying (a scenario that starts in the air): not
+    /// landed, no ground contact.
+    pub fn airborne(params: LandDetectorParams) -> Self {
+        let mut d = Self::new(params);
+        for h in [&mut d.ground_contact, &mut d.maybe_landed, &mut d.landed] {
+            *h = Hysteresis::new(false, h.delay_to_true_ns);
+        }
+        d
+    }
+
     pub(crate) fn update(&mut self, t_ns: u64, input: &LandInputs) {
         let p = &self.params;
         let freefall = input.specific_force_frd.norm() < p.freefall_acc_mps2;

@@ -103,6 +103,19 @@ impl Commander {
         })
     }
 
+    /// Puts the commander in the state of a vehicle flown up by its pilot: armed at `t_ns`,
+    /// taken off, holding position in Position mode (a scenario that starts in hover).
+    pub fn start_airborne(&mut self, t_ns: u64) {
+        self.armed = true;
+        self.armed_at_ns = t_ns;
+        self.have_taken_off = true;
+        self.landed_since_ns = None;
+        self.land = LandDetector::airborne(self.params.land_detector.clone());
+        self.nav_state = NavState::Position;
+        self.user_intent = NavState::Position;
+        self.hold = None;
+    }
+
     /// A SET_ATTITUDE_TARGET received at `t_ns`.
     pub fn on_attitude_target(&mut self, t_ns: u64, msg: &AttitudeTarget) {
         self.counters.setpoint_messages += 1;

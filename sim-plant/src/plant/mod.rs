@@ -136,7 +136,11 @@ impl Plant {
         let b = &self.world.state().quads[k].body;
         let p = b.position_ned;
         let mut flags = 0;
-        if self.obstacles.iter().any(|o| o.contains(&p, self.drone_radius_m)) {
+        if self
+            .obstacles
+            .iter()
+            .any(|o| o.contains(&p, self.drone_radius_m))
+        {
             flags |= crash_flags::OBSTACLE;
         }
         if (0..3).any(|i| p[i] < self.arena[0][i] - 0.01 || p[i] > self.arena[1][i] + 0.01) {
@@ -176,7 +180,7 @@ impl Plant {
 
     /// Times each drone's failsafe fired.
     pub fn failsafe_count(&self) -> [u32; 2] {
-        [0, 1].map(|k| self.px4[k].commander().counters().failsafes_fired as u32)
+        [0, 1].map(|k| self.px4[k].commander().counters().failsafe_fired as u32)
     }
 
     /// Bits of `shared_types::crash_flags` per drone, latched.

@@ -60,8 +60,7 @@ impl EmulatedPx4 {
             mocap: MocapPerturbation::new(pert, seed(2)).map_err(|e| param(e.to_string()))?,
             estimator,
             commander: Commander::new(cfg.commander.clone()).map_err(|e| param(e.to_string()))?,
-            inner: MultirotorInnerLoops::new(&cfg.inner_loops)
-                .map_err(|e| param(e.to_string()))?,
+            inner: MultirotorInnerLoops::new(&cfg.inner_loops).map_err(|e| param(e.to_string()))?,
             rotor_cmd: [0.0; 4],
             last_imu: ImuSample {
                 specific_force_frd: Vector3::new(0.0, 0.0, -9.81),
@@ -122,7 +121,10 @@ impl EmulatedPx4 {
             }
             Inbound::Command {
                 command, params, ..
-            } => Some(self.commander.on_command(t_ns, &CommandLong { command, params })),
+            } => Some(
+                self.commander
+                    .on_command(t_ns, &CommandLong { command, params }),
+            ),
             Inbound::Heartbeat { .. } => None,
         }
     }
@@ -177,9 +179,13 @@ impl EmulatedPx4 {
                     }
                     self.inner.update_rates(dt_s, &state, &rates, r.thrust)
                 }
-                _ => self
-                    .inner
-                    .update_attitude_with_yaw_rate(dt_s, &state, &q_sp, yaw_rate_ff, thrust),
+                _ => self.inner.update_attitude_with_yaw_rate(
+                    dt_s,
+                    &state,
+                    &q_sp,
+                    yaw_rate_ff,
+                    thrust,
+                ),
             },
             ControlDemand::Rates { rates_frd, thrust } => {
                 let mut rates = rates_frd;
