@@ -84,7 +84,7 @@ pub fn run(
     let limit_ns = (limit_s * 1e9) as u64;
     let mut max_tension: f64 = 0.0;
     let mut lifted_at = None;
-    let started_in_contact = plant.world().payload_contact().in_contact;
+    let mut was_in_contact = false;
     let mut done_at_ns: Option<u64> = None;
     let linger_ns = (scenario.linger_s.max(0.0) * 1e9) as u64;
     let wall = Instant::now();
@@ -95,7 +95,9 @@ pub fn run(
         max_tension = max_tension
             .max(w.cable(0).tension_n)
             .max(w.cable(1).tension_n);
-        if started_in_contact && lifted_at.is_none() && !w.payload_contact().in_contact {
+        if w.payload_contact().in_contact {
+            was_in_contact = true;
+        } else if was_in_contact && lifted_at.is_none() {
             lifted_at = Some(plant.time_ns() as f64 * 1e-9);
         }
         if pilot.finished() && done_at_ns.is_none() {
