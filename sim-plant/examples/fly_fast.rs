@@ -4,9 +4,11 @@ fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let name = args.first().map(String::as_str).unwrap_or("test-a");
     let scenario = sim_plant::scenario::Scenario::load(name).expect("scenario");
-    let mut cfg = sim_plant::plant::PlantConfig::default();
-    cfg.seed = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(1);
-    cfg.perturbation_enabled = !args.iter().any(|a| a == "--no-noise");
+    let cfg = sim_plant::plant::PlantConfig {
+        seed: args.get(1).and_then(|s| s.parse().ok()).unwrap_or(1),
+        perturbation_enabled: !args.iter().any(|a| a == "--no-noise"),
+        ..Default::default()
+    };
     let report = sim_plant::fast::run(&scenario, &cfg, None).expect("plant");
     println!("{report}");
 }

@@ -39,7 +39,14 @@ fn each_sensor_reads_its_drones_true_anchor_force() {
     let (remote, local) = (free_udp_port(), free_udp_port());
     let _plant = Killed(
         Command::new(TAUT)
-            .args(["plant", "--scenario", "test-b", "--duration", "30", "--no-noise"])
+            .args([
+                "plant",
+                "--scenario",
+                "test-b",
+                "--duration",
+                "30",
+                "--no-noise",
+            ])
             .args(["--remote-port", &remote.to_string()])
             .args(["--local-port", &local.to_string()])
             .arg("--socket-dir")
@@ -52,7 +59,10 @@ fn each_sensor_reads_its_drones_true_anchor_force() {
     let socket = |uav: &str| dir.join(format!("taut-{uav}-i2c.sock"));
     let t0 = Instant::now();
     while !(socket("uav1").exists() && socket("uav2").exists()) {
-        assert!(t0.elapsed() < Duration::from_secs(10), "the plant never served its sensors");
+        assert!(
+            t0.elapsed() < Duration::from_secs(10),
+            "the plant never served its sensors"
+        );
         std::thread::sleep(Duration::from_millis(50));
     }
     let ipc = Ipc::new(&format!("plant-sensor-test-{id}"), &root, names::PLANT).unwrap();
@@ -96,7 +106,10 @@ fn each_sensor_reads_its_drones_true_anchor_force() {
         let truth = truth_sum.map(|s| s / truth_n);
         // Without the perturbation the formation is symmetric: each cable carries half the
         // payload's weight.
-        assert!((truth[2] - 0.5 * 9.81).abs() < 0.3, "{uav}: truth {truth:?}");
+        assert!(
+            (truth[2] - 0.5 * 9.81).abs() < 0.3,
+            "{uav}: truth {truth:?}"
+        );
         for (i, t) in truth.iter().enumerate() {
             let measured = m[i].as_f64().unwrap();
             assert!(

@@ -65,7 +65,7 @@ impl Plant {
             .collect();
         let initial = initial_state(scenario, &params)?;
         let world = World::new(params, initial).map_err(|e| PlantError::World(e.to_string()))?;
-        let s = world.state().clone();
+        let s = *world.state();
         let mut px4 = [
             EmulatedPx4::new(cfg, 0, &s.quads[0].body)?,
             EmulatedPx4::new(cfg, 1, &s.quads[1].body)?,
@@ -112,7 +112,7 @@ impl Plant {
 
     /// Advances one physics step; the autopilots tick first when their tick is due.
     pub fn step(&mut self) {
-        if self.steps % self.steps_per_tick == 0 {
+        if self.steps.is_multiple_of(self.steps_per_tick) {
             let tick_dt = self.dt_s * self.steps_per_tick as f64;
             for k in 0..2 {
                 let q = &self.world.state().quads[k];
