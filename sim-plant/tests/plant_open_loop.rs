@@ -41,7 +41,7 @@ fn setpoint(t_ns: u64, q: UnitQuaternion<f64>, thrust: f64) -> Inbound {
 fn stream(p: &mut Plant, seconds: f64, q: UnitQuaternion<f64>, thrust: f64) {
     let end = p.time_ns() + (seconds * 1e9) as u64;
     while p.time_ns() < end {
-        if p.time_ns() % 20_000_000 == 0 {
+        if p.time_ns().is_multiple_of(20_000_000) {
             p.handle(0, setpoint(p.time_ns(), q, thrust));
         }
         p.step();
