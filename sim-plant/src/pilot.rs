@@ -4,8 +4,6 @@
 //! (`taut plant --pilot`, the fast-mode benchmark) and exercises the same inbound path that the
 //! MAVLink endpoint feeds.
 
-use nalgebra::Vector3;
-
 use crate::inner_loops::{ParamsError, PositionControl, PositionControlParams, TrajectorySetpoint};
 use crate::mavlink_link::{
     px4_custom_mode, Inbound, MavResult, Telemetry, MAV_MODE_FLAG_SAFETY_ARMED,
@@ -53,7 +51,7 @@ pub struct ScenarioPilot {
     next_ns: u64,
     last_ns: Option<u64>,
     started: bool,
-    /// When a phase ended, s (for the report).
+    /// Phases that have ended.
     phases_completed: usize,
     timed_out: bool,
 }
@@ -212,9 +210,4 @@ fn command(command: u16, p: [f32; 2]) -> Inbound {
         params: [p[0], p[1], 0.0, 0.0, 0.0, 0.0, 0.0],
         from: (255, 190),
     }
-}
-
-/// Distance of each drone from its setpoint, m (for reports).
-pub fn setpoint_errors(pilot: &ScenarioPilot, t_s: f64, positions: &[Vector3<f64>; 2]) -> [f64; 2] {
-    [0, 1].map(|k| (pilot.tracker.setpoint(k, t_s).position_ned_m - positions[k]).norm())
 }
