@@ -180,7 +180,11 @@ impl Plant {
 
     /// Times each drone's failsafe fired.
     pub fn failsafe_count(&self) -> [u32; 2] {
-        [0, 1].map(|k| self.px4[k].commander().counters().failsafe_fired as u32)
+        [0, 1].map(|k| self.drone_failsafes(k))
+    }
+
+    fn drone_failsafes(&self, k: usize) -> u32 {
+        self.px4[k].commander().counters().failsafe_fired as u32
     }
 
     /// Bits of `shared_types::crash_flags` per drone, latched.
@@ -201,7 +205,7 @@ impl Plant {
                 mocap_position_ned_m: arr(&self.px4[k].mocap_position()),
                 custom_mode: c.custom_mode(),
                 armed: c.is_armed() as u32,
-                failsafe_count: self.failsafe_count()[k],
+                failsafe_count: self.drone_failsafes(k),
                 crash_flags: self.crash_flags[k],
             }
         };

@@ -36,7 +36,6 @@ pub struct EmulatedPx4 {
     last_mocap: Vector3<f64>,
     estimate: VehicleEstimate,
     rotor_speed: [f64; 4],
-    last_tick_ns: Option<u64>,
     last_rate_injection_ns: u64,
 }
 
@@ -69,7 +68,6 @@ impl EmulatedPx4 {
             last_mocap: start.position_ned,
             estimate,
             rotor_speed: [0.0; 4],
-            last_tick_ns: None,
             last_rate_injection_ns: 0,
         })
     }
@@ -208,7 +206,6 @@ impl EmulatedPx4 {
                 self.inner.update_position(dt_s, &state, &sp)
             }
         };
-        self.last_tick_ns = Some(t_ns);
     }
 
     /// The snapshot the MAVLink link streams.
