@@ -1,4 +1,6 @@
 use serde::{Deserialize, Serialize};
+
+use crate::{ControllerConfig, MissionConfig, Px4Config, VehicleConfig};
 use std::path::Path;
 
 use crate::validate::{self, ConfigError};
@@ -21,6 +23,14 @@ pub struct Config {
     /// Absent means "not calibrated": nominal constants are used and every sample is flagged.
     #[serde(default)]
     pub calibration: Option<CalibrationConfig>,
+    #[serde(default)]
+    pub vehicle: VehicleConfig,
+    #[serde(default)]
+    pub controller: ControllerConfig,
+    #[serde(default)]
+    pub px4: Px4Config,
+    #[serde(default)]
+    pub mission: MissionConfig,
     #[serde(default)]
     pub services: ServicesConfig,
     #[serde(default)]
@@ -171,6 +181,12 @@ pub struct ServicesConfig {
     pub adc_sampler: ServiceRt,
     #[serde(default)]
     pub tension: ServiceRt,
+    #[serde(default)]
+    pub controller: ServiceRt,
+    #[serde(default)]
+    pub px4_bridge: ServiceRt,
+    #[serde(default)]
+    pub mission: ServiceRt,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]

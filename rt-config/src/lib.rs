@@ -3,9 +3,15 @@
 //! core pinning, and an absolute-deadline periodic loop with an overrun counter.
 
 mod config;
+mod controller_config;
+mod mission_config;
+mod px4_config;
 pub mod periodic;
 pub mod rt;
 mod validate;
 
 pub use config::*;
+pub use controller_config::*;
+pub use mission_config::*;
+pub use px4_config::*;
 pub use validate::ConfigError;

@@ -8,9 +8,11 @@
 //! Frames: NED (inertial) and FRD (body), as PX4 uses them; the force sensor's own frame `S` is
 //! described on [`TensionSample`].
 
+mod flight;
 pub mod names;
 mod samples;
 mod truth;
 
+pub use flight::*;
 pub use samples::*;
 pub use truth::*;

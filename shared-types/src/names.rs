@@ -6,6 +6,17 @@ pub const RAW_ADC: &str = "raw_adc";
 /// Topic of [`crate::TensionSample`]s from the tension stage.
 pub const TENSION: &str = "tension";
 
+/// Topic of [`crate::VehicleState`]s from the PX4 bridge.
+pub const VEHICLE_STATE: &str = "vehicle_state";
+/// Topic of [`crate::ImuSample`]s from the PX4 bridge.
+pub const IMU: &str = "imu";
+/// Topic of [`crate::MotorSpeeds`] from the PX4 bridge.
+pub const MOTOR_SPEEDS: &str = "motor_speeds";
+/// Topic of [`crate::MissionSetpoint`]s from the mission.
+pub const MISSION_SETPOINT: &str = "mission_setpoint";
+/// Topic of [`crate::AttitudeSetpoint`]s from the controller.
+pub const ATTITUDE_SETPOINT: &str = "attitude_setpoint";
+
 /// Topic of [`crate::PlantTruth`] under the uav id [`PLANT`]; evaluation only.
 pub const TRUTH: &str = "truth";
 /// The "uav" id the plant publishes under.

@@ -1,7 +1,10 @@
 use core::time::Duration;
 use iceoryx2::prelude::*;
 use iceoryx2::service::port_factory::{event, publish_subscribe};
-use shared_types::{names, Header, PlantTruth, RawAdcFrame, TensionSample};
+use shared_types::{
+    names, AttitudeSetpoint, Header, ImuSample, MissionSetpoint, MotorSpeeds, PlantTruth,
+    RawAdcFrame, TensionSample, VehicleState,
+};
 use std::fmt::Debug;
 
 /// Samples whose header the publisher stamps.
@@ -24,7 +27,16 @@ macro_rules! impl_stamped {
     )*};
 }
 
-impl_stamped!(RawAdcFrame, TensionSample, PlantTruth);
+impl_stamped!(
+    RawAdcFrame,
+    TensionSample,
+    PlantTruth,
+    VehicleState,
+    ImuSample,
+    MotorSpeeds,
+    MissionSetpoint,
+    AttitudeSetpoint,
+);
 
 /// One error enum for the plumbing; each variant names the service it failed on.
 #[derive(Debug, thiserror::Error)]

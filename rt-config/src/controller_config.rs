@@ -1,0 +1,117 @@
+//! Config of the vehicle and of the tension-aware cascade controller (paper IV, gains V.C).
+
+use serde::{Deserialize, Serialize};
+
+/// The drone and its load, as the controller and the bridge need them.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct VehicleConfig {
+    /// Mass of the drone with battery and sensor, kg (X500: 2.0 body + 4 x 0.016 rotors).
+    pub mass_kg: f64,
+    /// PX4's MPC_THR_HOVER for this airframe: normalised thrust that hovers `mass_kg`
+    /// (0.6 in PX4's gz x500 airframe).
+    pub hover_throttle: f64,
+    /// Gravity, m/s².
+    pub gravity_m_s2: f64,
+    /// Payload mass, kg (shared by the two cables).
+    pub payload_mass_kg: f64,
+    /// Cable rest length, m.
+    pub cable_length_m: f64,
+    /// Cable anchor below the drone's centre of mass, body FRD, m.
+    pub anchor_offset_frd_m: [f64; 3],
+    /// Half the distance between the payload's two cable anchors, m.
+    pub payload_anchor_half_span_m: f64,
+}
+
+impl Default for VehicleConfig {
+    fn default() -> Self {
+        Self {
+            mass_kg: 2.064,
+            hover_throttle: 0.6,
+            gravity_m_s2: 9.80665,
+            payload_mass_kg: 1.0,
+            cable_length_m: 1.5,
+            anchor_offset_frd_m: [0.0, 0.0, 0.08],
+            payload_anchor_half_span_m: 0.1,
+        }
+    }
+}
+
+/// The cascade's gains (diagonals, x y z in NED) and limits.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ControllerConfig {
+    /// Loop rate, Hz (the paper's outer loop: 100 Hz).
+    pub rate_hz: f64,
+    /// `odometry`: run when a vehicle state arrives (with the timer as a fallback);
+    /// `timer`: run on an absolute-deadline timer.
+    pub trigger: ControllerTrigger,
+    /// Position P, 1/s.
+    pub k_p: [f64; 3],
+    /// Tension PID on e_T = T_d - T_f shifting the setpoint: m/N, m/(N s), m s/N.
+    pub k_tp: [f64; 3],
+    pub k_ti: [f64; 3],
+    pub k_td: [f64; 3],
+    /// Velocity PID: 1/s, 1/s², dimensionless.
+    pub k_vp: [f64; 3],
+    pub k_vi: [f64; 3],
+    pub k_vd: [f64; 3],
+    /// Cut-off of the "light" low-pass on the measured tension, Hz.
+    pub tension_cutoff_hz: f64,
+    /// Cut-off of the low-pass on the velocity for the D term, Hz.
+    pub velocity_cutoff_hz: f64,
+    /// Largest setpoint shift the tension loop may make, per axis, m (anti-windup bound).
+    pub max_tension_shift_m: [f64; 3],
+    /// Largest velocity setpoint, horizontal and vertical, m/s.
+    pub max_velocity_xy_m_s: f64,
+    pub max_velocity_z_m_s: f64,
+    /// Bound of the velocity integrator's contribution, per axis, m/s².
+    pub max_velocity_integral_m_s2: [f64; 3],
+    /// Largest tilt of the thrust vector from vertical, deg.
+    pub max_tilt_deg: f64,
+    /// Collective thrust limits, N.
+    pub min_thrust_n: f64,
+    pub max_thrust_n: f64,
+    /// A tension sample older than this is not used (position-only control), s.
+    pub tension_max_age_s: f64,
+    /// Odometry older than this is flagged, s.
+    pub odometry_max_age_s: f64,
+    /// A mission setpoint older than this is flagged, s.
+    pub mission_max_age_s: f64,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum ControllerTrigger {
+    #[default]
+    Odometry,
+    Timer,
+}
+
+impl Default for ControllerConfig {
+    fn default() -> Self {
+        Self {
+            rate_hz: 100.0,
+            trigger: ControllerTrigger::Odometry,
+            k_p: [0.8, 0.8, 0.7],
+            k_tp: [0.22, 0.22, 0.06],
+            k_ti: [0.08, 0.08, 0.18],
+            k_td: [0.02, 0.02, 0.0],
+            k_vp: [2.7, 2.7, 6.0],
+            k_vi: [1.9, 1.9, 3.0],
+            k_vd: [0.3, 0.3, 0.5],
+            tension_cutoff_hz: 10.0,
+            velocity_cutoff_hz: 10.0,
+            max_tension_shift_m: [0.5, 0.5, 0.5],
+            max_velocity_xy_m_s: 3.0,
+            max_velocity_z_m_s: 1.5,
+            max_velocity_integral_m_s2: [3.0, 3.0, 6.0],
+            max_tilt_deg: 35.0,
+            min_thrust_n: 2.0,
+            max_thrust_n: 32.0,
+            tension_max_age_s: 0.05,
+            odometry_max_age_s: 0.1,
+            mission_max_age_s: 0.2,
+        }
+    }
+}
