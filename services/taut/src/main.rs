@@ -6,6 +6,7 @@ mod bench;
 mod calibrate_cmd;
 mod plant_cmd;
 mod sensor;
+mod sim;
 mod supervisor;
 mod svc;
 
