@@ -1,5 +1,5 @@
-//! `taut`: the one binary. Verbs for people (`launch`, `sensor`, `calibrate`, `bench`,
-//! `config check`) and `svc NAME`, the entry of each service process that `launch` starts as
+//! `taut`: the one binary. Verbs for people (`sim`, `launch`, `sensor`, `calibrate`, `plant`,
+//! `bench`, `config check`) and `svc NAME`, the entry of each service process that `launch` starts as
 //! a child of this same executable.
 
 mod bench;
@@ -42,6 +42,8 @@ enum Command {
     Sensor(sensor::SensorArgs),
     /// Compute a calibration from recorded frames, or run the paper's procedure on the emulator.
     Calibrate(calibrate_cmd::CalibrateArgs),
+    /// Fly a scenario plant-in-the-loop: the plant and both drones' services (the main job).
+    Sim(sim::SimArgs),
     /// The plant alone: two simulated drones with emulated PX4 (MAVLink) and force sensors.
     Plant(plant_cmd::PlantArgs),
     /// Benchmarks of the running service set.
@@ -76,6 +78,7 @@ fn main() -> ExitCode {
         Command::Launch { config } => supervisor::launch(&config),
         Command::Sensor(args) => sensor::run(&args),
         Command::Calibrate(args) => calibrate_cmd::run(&args),
+        Command::Sim(args) => sim::run(&args),
         Command::Plant(args) => plant_cmd::run(&args),
         Command::Bench(args) => bench::run(&args),
         Command::Svc(args) => svc::run(&args),

@@ -198,10 +198,7 @@ pub fn measure(args: &SensorArgs, show: &mut dyn FnMut(&str)) -> Result<SensorSu
     let mut sup = Supervisor::new(cfg.supervisor)?;
     let result = (|| {
         if args.sim {
-            sup.start(ServiceSpec {
-                name: "sim-sensor".into(),
-                args: sim_args(&emulator),
-            })?;
+            sup.start(ServiceSpec::svc("sim-sensor", sim_args(&emulator)))?;
             wait_for_socket(emulator.socket.as_ref().expect("set above"))?;
         }
         for spec in crate::supervisor::drone_services(&cfg_path) {

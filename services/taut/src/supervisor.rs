@@ -12,8 +12,23 @@ use taut_ipc::{install_stop_handler, stop_requested};
 
 /// One child service: how to start it and its state.
 pub struct ServiceSpec {
+    /// Label in reports and the log file's name.
     pub name: String,
+    /// Arguments after the executable: `svc <service> --config FILE`, or another verb
+    /// (`plant ...` in simulation).
     pub args: Vec<String>,
+}
+
+impl ServiceSpec {
+    /// `taut svc <service> <args...>`.
+    pub fn svc(service: &str, args: Vec<String>) -> Self {
+        let mut all = vec!["svc".to_string(), service.to_string()];
+        all.extend(args);
+        ServiceSpec {
+            name: service.to_string(),
+            args: all,
+        }
+    }
 }
 
 struct Running {
@@ -39,6 +54,8 @@ pub struct Supervisor {
     services: Vec<Running>,
     /// Death reports, for the summary and for tests.
     pub deaths: Vec<String>,
+    /// When set, each child's stdout and stderr go to `<dir>/<name>.log` (appended).
+    log_dir: Option<PathBuf>,
 }
 
 impl Supervisor {
@@ -50,12 +67,31 @@ impl Supervisor {
             cfg,
             services: Vec::new(),
             deaths: Vec::new(),
+            log_dir: None,
         })
+    }
+
+    /// Sends every child's output to `<dir>/<name>.log` instead of this terminal.
+    pub fn log_to(mut self, dir: &Path) -> Self {
+        self.log_dir = Some(dir.to_path_buf());
+        self
     }
 
     fn spawn(&self, spec: &ServiceSpec) -> Result<Child, String> {
         let mut cmd = Command::new(&self.exe);
-        cmd.arg("svc").arg(&spec.name).args(&spec.args);
+        cmd.args(&spec.args);
+        if let Some(dir) = &self.log_dir {
+            let path = dir.join(format!("{}.log", spec.name));
+            let log = std::fs::OpenOptions::new()
+                .create(true)
+                .append(true)
+                .open(&path)
+                .map_err(|e| format!("cannot open log {}: {e}", path.display()))?;
+            let err = log
+                .try_clone()
+                .map_err(|e| format!("cannot open log {}: {e}", path.display()))?;
+            cmd.stdout(log).stderr(err);
+        }
         // SAFETY: prctl is async-signal-safe; it only sets this child's parent-death signal.
         unsafe {
             cmd.pre_exec(|| {
@@ -166,10 +202,7 @@ pub fn drone_services(config_path: &Path) -> Vec<ServiceSpec> {
     let cfg = config_path.display().to_string();
     ["adc-sampler", "tension"]
         .into_iter()
-        .map(|name| ServiceSpec {
-            name: name.to_string(),
-            args: vec!["--config".into(), cfg.clone()],
-        })
+        .map(|name| ServiceSpec::svc(name, vec!["--config".into(), cfg.clone()]))
         .collect()
 }
 

@@ -1,0 +1,370 @@
+//! `taut sim --fast`: the whole flight in one process, in simulated time. The plant is the same
+//! `Plant` the real-time process steps; per drone the same library code as the services runs:
+//! the tension stage, the cascade controller, the mission's phase machine, and the bridge's
+//! offboard link, which exchanges the very MAVLink messages it would put on the wire with the
+//! plant's emulated PX4 (in memory, no encoding). Peer signals go from one mission to the other
+//! directly.
+//!
+//! Where it differs from the real-time run (and so what the comparison's tolerance covers):
+//! - The force sensor's four chips are read at the sampler's nominal 240 Hz at the instant of
+//!   each frame, not through the sampler's edge-tracking I2C schedule; a chip not ready yet is
+//!   marked stale, as the sampler does.
+//! - No scheduling or IPC delays: a stage's output is seen by the next at the same simulated
+//!   instant (the real-time latencies are tens of µs to a few ms, see the summary).
+//! - The plant's clock is the only clock: every `t_origin_ns` is simulated time.
+
+use super::metrics::MetricsRecorder;
+use super::summary::Summary;
+use super::{new_recorder, Outcome, SimArgs};
+use adc_sampler::mcp3423::{Reading, SampleRate};
+use controller::ControllerStage;
+use mavlink::common::{MavMessage, COMMAND_ACK_DATA};
+use mavlink::MavHeader;
+use mission::{MissionStage, PeerSignal};
+use px4_bridge::{OffboardLink, Telemetry};
+use rt_config::Config;
+use shared_types::{
+    AttitudeSetpoint, ChannelStatus, MissionSetpoint, RawAdcFrame, SamplingMode, TensionSample,
+    VehicleState,
+};
+use sim_plant::mavlink_link::inbound::{attitude_target, CommandLong};
+use sim_plant::mavlink_link::{outbound, IntervalRequest, LinkConfig, Stream, StreamSchedule};
+use sim_plant::plant::{Plant, PlantConfig};
+use sim_plant::scenario::Scenario;
+use sim_plant::sensor::{BusConfig, LoadProfile, SensorBus, SensorModel, SensorParams};
+use std::time::Instant;
+use tension::{TensionStage, TensionStageConfig};
+
+/// MAV_CMD_SET_MESSAGE_INTERVAL: answered by the link layer, as the plant's endpoint does.
+const MAV_CMD_SET_MESSAGE_INTERVAL: u16 = 511;
+/// The sensor is driven by the anchor force with a 1 ms zero-order hold, as in real time.
+const SENSOR_HOLD_NS: u64 = 1_000_000;
+/// The plant publishes its truth at 100 Hz in real time; the metrics see it at the same rate.
+const TRUTH_PERIOD_NS: u64 = 10_000_000;
+
+/// One drone's companion side, in process.
+struct FastDrone {
+    cfg: Config,
+    sensor: SensorBus,
+    tension: TensionStage,
+    controller: ControllerStage,
+    mission: MissionStage,
+    link: OffboardLink,
+    /// The plant side of the link: which streams are due (SET_MESSAGE_INTERVAL changes it).
+    streams: StreamSchedule,
+    plant_link: LinkConfig,
+    frame_period_ns: u64,
+    next_frame_ns: u64,
+    raw_sequence: u64,
+    last_codes: [i16; 4],
+    newest_tension: Option<TensionSample>,
+    newest_state: Option<VehicleState>,
+    newest_mission: Option<MissionSetpoint>,
+    state_pending: bool,
+    next_mission_ns: u64,
+    mission_period_ns: u64,
+    last_signal: Option<PeerSignal>,
+    controller_period_ns: u64,
+    next_controller_ns: u64,
+}
+
+impl FastDrone {
+    fn new(cfg: Config, scenario: &Scenario, k: usize, seed: u64) -> Result<Self, String> {
+        let model = SensorModel::new(SensorParams::default()).map_err(|e| e.to_string())?;
+        let sensor = SensorBus::new(
+            BusConfig::default(),
+            model,
+            LoadProfile::Constant([0.0; 3]),
+            0,
+            seed.wrapping_mul(2).wrapping_add(k as u64),
+        )
+        .map_err(|e| e.to_string())?;
+        let controller = ControllerStage::new(&cfg.vehicle, &cfg.controller)
+            .map_err(|e| format!("{}: {e}", cfg.uav))?;
+        let mission =
+            MissionStage::new(scenario, k, &cfg.mission).map_err(|e| format!("{}: {e}", cfg.uav))?;
+        let link =
+            OffboardLink::new(&cfg.px4, &cfg.vehicle).map_err(|e| format!("{}: {e}", cfg.uav))?;
+        let plant_link = LinkConfig::px4_sitl(k as u8);
+        Ok(FastDrone {
+            tension: TensionStage::new(TensionStageConfig::from_config(&cfg)),
+            streams: StreamSchedule::new(&plant_link.rates),
+            plant_link,
+            frame_period_ns: (1e9 / cfg.sensor.rate_hz).round() as u64,
+            next_frame_ns: 0,
+            raw_sequence: 0,
+            last_codes: [0; 4],
+            newest_tension: None,
+            newest_state: None,
+            newest_mission: None,
+            state_pending: false,
+            mission_period_ns: (1e9 / cfg.mission.rate_hz).round() as u64,
+            next_mission_ns: 0,
+            last_signal: None,
+            controller_period_ns: (1e9 / cfg.controller.rate_hz).round() as u64,
+            next_controller_ns: 0,
+            sensor,
+            controller,
+            mission,
+            link,
+            cfg,
+        })
+    }
+
+    /// Reads the four chips at `t_ns` like one sampler frame, and runs the tension stage.
+    fn sample_sensor(&mut self, t_ns: u64) {
+        let addresses = self.cfg.sensor.addresses;
+        let mut frame = RawAdcFrame {
+            mode: SamplingMode::Continuous,
+            ..Default::default()
+        };
+        for (c, addr) in addresses.iter().enumerate() {
+            let mut buf = [0u8; 3];
+            let read = self.sensor.read(*addr, &mut buf, t_ns);
+            let reading = read.ok().and_then(|_| Reading::decode(SampleRate::Sps240Bits12, &buf));
+            frame.status[c] = match reading {
+                Some(r) if r.ready => {
+                    self.last_codes[c] = r.code as i16;
+                    if r.saturated {
+                        ChannelStatus::Saturated
+                    } else {
+                        ChannelStatus::Fresh
+                    }
+                }
+                Some(_) => ChannelStatus::Stale,
+                None => ChannelStatus::BusError,
+            };
+            frame.codes[c] = self.last_codes[c];
+            // The code integrates the conversion that just ended: its middle is half a period back.
+            frame.conversion_ns[c] = t_ns.saturating_sub(self.frame_period_ns / 2);
+        }
+        frame.header.sequence = self.raw_sequence;
+        frame.header.t_origin_ns = t_ns.saturating_sub(self.frame_period_ns / 2);
+        frame.header.t_publish_ns = t_ns;
+        self.raw_sequence += 1;
+        let mut s = self.tension.process(&frame);
+        s.header.t_publish_ns = t_ns;
+        self.newest_tension = Some(s);
+    }
+
+    /// A message from the emulated PX4 to the bridge.
+    fn to_bridge(&mut self, t_ns: u64, msg: &MavMessage) {
+        let header = MavHeader {
+            system_id: self.plant_link.system_id,
+            component_id: self.plant_link.component_id,
+            sequence: 0,
+        };
+        match self.link.on_message(t_ns, &header, msg) {
+            Some(Telemetry::State(mut s)) => {
+                s.header.t_publish_ns = t_ns;
+                self.newest_state = Some(s);
+                self.state_pending = true;
+            }
+            Some(_) | None => {}
+        }
+    }
+
+    /// A message from the bridge to the emulated PX4 (what the plant's endpoint would do with it).
+    fn to_plant(&mut self, plant: &mut Plant, k: usize, t_ns: u64, msg: &MavMessage) {
+        let (sys, comp) = (self.plant_link.system_id, self.plant_link.component_id);
+        match msg {
+            MavMessage::SET_ATTITUDE_TARGET(d) => {
+                if let Some(inbound) = attitude_target(d, sys, comp) {
+                    plant.handle(k, inbound);
+                }
+            }
+            MavMessage::HEARTBEAT(_) => {
+                plant.handle(
+                    k,
+                    sim_plant::mavlink_link::Inbound::Heartbeat {
+                        sysid: self.cfg.px4.system_id,
+                        compid: self.cfg.px4.component_id,
+                    },
+                );
+            }
+            MavMessage::COMMAND_LONG(d) => {
+                let cmd = CommandLong::from_parsed(d);
+                if !cmd.is_for(sys, comp) {
+                    return;
+                }
+                let result = if cmd.command == MAV_CMD_SET_MESSAGE_INTERVAL {
+                    let stream = (cmd.params[0] >= 0.0)
+                        .then(|| Stream::from_message_id(cmd.params[0] as u32))
+                        .flatten();
+                    match (stream, IntervalRequest::from_param_us(cmd.params[1])) {
+                        (Some(stream), Some(req)) => {
+                            self.streams.set(stream, req, t_ns);
+                            mavlink::common::MavResult::MAV_RESULT_ACCEPTED
+                        }
+                        _ => mavlink::common::MavResult::MAV_RESULT_DENIED,
+                    }
+                } else {
+                    plant
+                        .handle(
+                            k,
+                            sim_plant::mavlink_link::Inbound::Command {
+                                command: cmd.command,
+                                params: cmd.params,
+                                from: (self.cfg.px4.system_id, self.cfg.px4.component_id),
+                            },
+                        )
+                        .unwrap_or(mavlink::common::MavResult::MAV_RESULT_UNSUPPORTED)
+                };
+                let ack = MavMessage::COMMAND_ACK(COMMAND_ACK_DATA {
+                    command: d.command,
+                    result,
+                    progress: 0,
+                    result_param2: 0,
+                    target_system: self.cfg.px4.system_id,
+                    target_component: self.cfg.px4.component_id,
+                });
+                self.to_bridge(t_ns, &ack);
+            }
+            _ => {}
+        }
+    }
+}
+
+pub fn run(args: &SimArgs, scenario: &Scenario) -> Result<Summary, String> {
+    let plant_cfg = PlantConfig {
+        seed: args.seed,
+        perturbation_enabled: !args.no_noise,
+        ..PlantConfig::default()
+    };
+    let mut plant = Plant::new(scenario, &plant_cfg).map_err(|e| e.to_string())?;
+    let ports = super::setup::Ports {
+        mavlink_remote_base: 14540,
+        mavlink_local_base: 14580,
+        zenoh: [7447, 7448],
+    };
+    let mut drones = Vec::new();
+    for k in 0..2 {
+        let cfg = super::setup::drone_config(
+            &args.scenario,
+            scenario,
+            k,
+            "fast",
+            std::path::Path::new("/nonexistent"),
+            &ports,
+        );
+        drones.push(FastDrone::new(cfg, scenario, k, args.seed)?);
+    }
+    let mut rec = new_recorder(scenario);
+    let mut outcome = Outcome::default();
+    let limit_ns = (args.time_limit_s(scenario) * 1e9) as u64;
+    let wall = Instant::now();
+    let mut next_truth_ns = 0;
+    let mut next_hold_ns = 0;
+    while plant.time_ns() < limit_ns {
+        plant.step();
+        let t = plant.time_ns();
+        fly_companions(&mut plant, &mut drones, &mut rec, t, &mut next_hold_ns);
+        if t >= next_truth_ns {
+            next_truth_ns += TRUTH_PERIOD_NS;
+            let mut truth = plant.truth();
+            truth.header.t_origin_ns = t;
+            rec.on_truth(&truth);
+            outcome.sim_s = t as f64 * 1e-9;
+            outcome.observe_truth(&truth);
+            outcome.observe_missions(&[drones[0].newest_mission, drones[1].newest_mission]);
+        }
+        if outcome.failure.is_some() {
+            break;
+        }
+        if let Some(done_s) = outcome.done_at_s {
+            if outcome.sim_s >= done_s + scenario.linger_s.max(1.0) {
+                break;
+            }
+        }
+    }
+    if outcome.failure.is_none() && outcome.done_at_s.is_none() {
+        outcome.fail(format!("no end after {:.0} s", limit_ns as f64 * 1e-9));
+    }
+    Ok(outcome.summary(args, scenario, "fast", &rec, wall.elapsed().as_secs_f64()))
+}
+
+/// Everything the companions do at plant time `t`.
+fn fly_companions(
+    plant: &mut Plant,
+    drones: &mut [FastDrone],
+    rec: &mut MetricsRecorder,
+    t: u64,
+    next_hold_ns: &mut u64,
+) {
+    let drive_sensor = t >= *next_hold_ns;
+    if drive_sensor {
+        *next_hold_ns += SENSOR_HOLD_NS;
+    }
+    for (k, d) in drones.iter_mut().enumerate() {
+        if drive_sensor {
+            d.sensor.advance_to(t);
+            d.sensor
+                .set_profile(LoadProfile::Constant(plant.anchor_force_frd(k)), 0);
+        }
+        if t >= d.next_frame_ns {
+            d.next_frame_ns += d.frame_period_ns;
+            d.sample_sensor(t);
+        }
+        // Telemetry the emulated PX4 streams now.
+        let tel = plant.telemetry(k);
+        for stream in Stream::ALL {
+            if d.streams.take_due(stream, t) {
+                let msg = match stream {
+                    Stream::Heartbeat => outbound::heartbeat(&tel),
+                    s => outbound::stream_message(s, &tel),
+                };
+                d.to_bridge(t, &msg);
+            }
+        }
+        // The bridge's own traffic: heartbeats, the handshake, message intervals.
+        let mut out: [Option<MavMessage>; 8] = Default::default();
+        let mut n = 0;
+        d.link.poll(t, &mut |m: &MavMessage| {
+            if n < out.len() {
+                out[n] = Some(m.clone());
+                n += 1;
+            }
+        });
+        for m in out.iter().flatten() {
+            d.to_plant(plant, k, t, m);
+        }
+    }
+    // Missions at their rate, each seeing the other's newest signal.
+    for k in 0..2 {
+        if t < drones[k].next_mission_ns {
+            continue;
+        }
+        drones[k].next_mission_ns += drones[k].mission_period_ns;
+        let peer_signal = drones[1 - k].last_signal;
+        let d = &mut drones[k];
+        let out = d.mission.step(t, d.newest_state.as_ref(), peer_signal.as_ref().map(|s| (s, t)));
+        let mut sp = out.setpoint;
+        sp.header.t_publish_ns = t;
+        d.newest_mission = Some(sp);
+        d.last_signal = Some(out.signal);
+        if let Some((i, name, ts)) = rec.on_mission(k, &sp) {
+            println!("[sim] drone {} phase {i} {name} started at {ts:.2} s", k + 1);
+        }
+    }
+    // Controllers: on odometry, or on their deadline when it is late (as the service does).
+    for (k, d) in drones.iter_mut().enumerate() {
+        let due = d.state_pending || t >= d.next_controller_ns + d.controller_period_ns / 2;
+        if !due || t < d.next_controller_ns.saturating_sub(d.controller_period_ns / 2) {
+            continue;
+        }
+        let Some(state) = d.newest_state else { continue };
+        d.state_pending = false;
+        d.next_controller_ns = t + d.controller_period_ns;
+        let mut sp: AttitudeSetpoint = d.controller.step(
+            t,
+            &state,
+            d.newest_tension.as_ref(),
+            d.newest_mission.as_ref(),
+        );
+        sp.header.t_publish_ns = t;
+        rec.on_setpoint(k, &sp, false);
+        if let Some(msg) = d.link.on_setpoint(t, &sp) {
+            d.to_plant(plant, k, t, &msg);
+        }
+    }
+}
