@@ -78,6 +78,9 @@ pub struct ControllerConfig {
     pub odometry_max_age_s: f64,
     /// A mission setpoint older than this is flagged, s.
     pub mission_max_age_s: f64,
+    /// Time constant with which the tension shift decays to zero while the mission has the
+    /// tension loop off, s.
+    pub tension_shift_decay_s: f64,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -112,6 +115,158 @@ impl Default for ControllerConfig {
             tension_max_age_s: 0.05,
             odometry_max_age_s: 0.1,
             mission_max_age_s: 0.2,
+            tension_shift_decay_s: 1.0,
         }
+    }
+}
+
+fn finite(key: &str, v: f64) -> Result<(), String> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(format!("key `{key}` = {v}: must be finite"))
+    }
+}
+
+fn positive(key: &str, v: f64) -> Result<(), String> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(format!("key `{key}` = {v}: must be finite and > 0"))
+    }
+}
+
+fn non_negative(key: &str, v: f64) -> Result<(), String> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(())
+    } else {
+        Err(format!("key `{key}` = {v}: must be finite and >= 0"))
+    }
+}
+
+fn each(key: &str, v: &[f64; 3], check: fn(&str, f64) -> Result<(), String>) -> Result<(), String> {
+    v.iter()
+        .enumerate()
+        .try_for_each(|(i, x)| check(&format!("{key}[{i}]"), *x))
+}
+
+impl VehicleConfig {
+    /// Checks every key; the error names the first bad one (`vehicle.mass_kg`, ...).
+    pub fn validate(&self) -> Result<(), String> {
+        positive("vehicle.mass_kg", self.mass_kg)?;
+        if !(self.hover_throttle.is_finite()
+            && self.hover_throttle > 0.0
+            && self.hover_throttle <= 1.0)
+        {
+            return Err(format!(
+                "key `vehicle.hover_throttle` = {}: must lie in (0, 1]",
+                self.hover_throttle
+            ));
+        }
+        positive("vehicle.gravity_m_s2", self.gravity_m_s2)?;
+        non_negative("vehicle.payload_mass_kg", self.payload_mass_kg)?;
+        positive("vehicle.cable_length_m", self.cable_length_m)?;
+        each(
+            "vehicle.anchor_offset_frd_m",
+            &self.anchor_offset_frd_m,
+            finite,
+        )?;
+        non_negative(
+            "vehicle.payload_anchor_half_span_m",
+            self.payload_anchor_half_span_m,
+        )
+    }
+}
+
+impl ControllerConfig {
+    /// Checks every key; the error names the first bad one (`controller.k_p[2]`, ...).
+    pub fn validate(&self) -> Result<(), String> {
+        positive("controller.rate_hz", self.rate_hz)?;
+        for (key, gains) in [
+            ("controller.k_p", &self.k_p),
+            ("controller.k_tp", &self.k_tp),
+            ("controller.k_ti", &self.k_ti),
+            ("controller.k_td", &self.k_td),
+            ("controller.k_vp", &self.k_vp),
+            ("controller.k_vi", &self.k_vi),
+            ("controller.k_vd", &self.k_vd),
+            ("controller.max_tension_shift_m", &self.max_tension_shift_m),
+            (
+                "controller.max_velocity_integral_m_s2",
+                &self.max_velocity_integral_m_s2,
+            ),
+        ] {
+            each(key, gains, non_negative)?;
+        }
+        positive("controller.tension_cutoff_hz", self.tension_cutoff_hz)?;
+        positive("controller.velocity_cutoff_hz", self.velocity_cutoff_hz)?;
+        positive("controller.max_velocity_xy_m_s", self.max_velocity_xy_m_s)?;
+        positive("controller.max_velocity_z_m_s", self.max_velocity_z_m_s)?;
+        if !(self.max_tilt_deg.is_finite() && self.max_tilt_deg > 0.0 && self.max_tilt_deg <= 80.0)
+        {
+            return Err(format!(
+                "key `controller.max_tilt_deg` = {}: must lie in (0, 80]",
+                self.max_tilt_deg
+            ));
+        }
+        non_negative("controller.min_thrust_n", self.min_thrust_n)?;
+        positive("controller.max_thrust_n", self.max_thrust_n)?;
+        if self.min_thrust_n >= self.max_thrust_n {
+            return Err(format!(
+                "key `controller.min_thrust_n` = {}: must be below controller.max_thrust_n = {}",
+                self.min_thrust_n, self.max_thrust_n
+            ));
+        }
+        positive("controller.tension_max_age_s", self.tension_max_age_s)?;
+        positive("controller.odometry_max_age_s", self.odometry_max_age_s)?;
+        positive("controller.mission_max_age_s", self.mission_max_age_s)?;
+        positive(
+            "controller.tension_shift_decay_s",
+            self.tension_shift_decay_s,
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_valid() {
+        VehicleConfig::default().validate().unwrap();
+        ControllerConfig::default().validate().unwrap();
+    }
+
+    #[test]
+    fn errors_name_the_key() {
+        let mut c = ControllerConfig::default();
+        c.k_p[2] = -1.0;
+        let e = c.validate().unwrap_err();
+        assert!(e.contains("controller.k_p[2]"), "{e}");
+        let c = ControllerConfig {
+            min_thrust_n: 40.0,
+            ..Default::default()
+        };
+        assert!(c
+            .validate()
+            .unwrap_err()
+            .contains("controller.min_thrust_n"));
+        let c = ControllerConfig {
+            max_tilt_deg: 90.0,
+            ..Default::default()
+        };
+        assert!(c
+            .validate()
+            .unwrap_err()
+            .contains("controller.max_tilt_deg"));
+        let mut v = VehicleConfig::default();
+        v.anchor_offset_frd_m[1] = f64::NAN;
+        let e = v.validate().unwrap_err();
+        assert!(e.contains("vehicle.anchor_offset_frd_m[1]"), "{e}");
+        let v = VehicleConfig {
+            hover_throttle: 1.5,
+            ..Default::default()
+        };
+        assert!(v.validate().unwrap_err().contains("vehicle.hover_throttle"));
     }
 }

@@ -22,6 +22,8 @@ pub enum ServiceName {
     Tension,
     /// The emulated force sensor: serves four MCP3423s on a Unix socket.
     SimSensor,
+    /// VehicleState + TensionSample + MissionSetpoint -> AttitudeSetpoint (paper IV).
+    Controller,
 }
 
 impl ServiceName {
@@ -30,6 +32,7 @@ impl ServiceName {
             ServiceName::AdcSampler => "adc-sampler",
             ServiceName::Tension => "tension",
             ServiceName::SimSensor => "sim-sensor",
+            ServiceName::Controller => "controller",
         }
     }
 }
@@ -73,6 +76,10 @@ pub fn run(args: &SvcArgs) -> Result<(), String> {
     install_stop_handler();
     match args.name {
         ServiceName::SimSensor => run_sim_sensor(&args.sim),
+        // Applies cfg.services.controller itself.
+        ServiceName::Controller => {
+            controller::shell::run(&crate::load_config(args.config.as_deref())?)
+        }
         name => {
             let cfg = crate::load_config(args.config.as_deref())?;
             let rt = match name {
@@ -231,7 +238,7 @@ pub fn parse_faults(specs: &[String]) -> Result<Faults, String> {
             other => {
                 return Err(format!(
                     "--fault {spec:?}: unknown fault {other:?} (nack, stuck, silent, saturate)"
-                ))
+                ));
             }
         }
     }
