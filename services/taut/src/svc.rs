@@ -22,6 +22,8 @@ pub enum ServiceName {
     Tension,
     /// The emulated force sensor: serves four MCP3423s on a Unix socket.
     SimSensor,
+    /// Scenario phases agreed with the peer drone over zenoh -> MissionSetpoint.
+    Mission,
 }
 
 impl ServiceName {
@@ -30,6 +32,7 @@ impl ServiceName {
             ServiceName::AdcSampler => "adc-sampler",
             ServiceName::Tension => "tension",
             ServiceName::SimSensor => "sim-sensor",
+            ServiceName::Mission => "mission",
         }
     }
 }
@@ -73,6 +76,8 @@ pub fn run(args: &SvcArgs) -> Result<(), String> {
     install_stop_handler();
     match args.name {
         ServiceName::SimSensor => run_sim_sensor(&args.sim),
+        // The shell applies cfg.services.mission itself.
+        ServiceName::Mission => mission::shell::run(&crate::load_config(args.config.as_deref())?),
         name => {
             let cfg = crate::load_config(args.config.as_deref())?;
             let rt = match name {
