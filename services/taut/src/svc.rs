@@ -24,6 +24,8 @@ pub enum ServiceName {
     SimSensor,
     /// VehicleState + TensionSample + MissionSetpoint -> AttitudeSetpoint (paper IV).
     Controller,
+    /// Scenario phases agreed with the peer drone over zenoh -> MissionSetpoint.
+    Mission,
 }
 
 impl ServiceName {
@@ -33,6 +35,7 @@ impl ServiceName {
             ServiceName::Tension => "tension",
             ServiceName::SimSensor => "sim-sensor",
             ServiceName::Controller => "controller",
+            ServiceName::Mission => "mission",
         }
     }
 }
@@ -80,6 +83,8 @@ pub fn run(args: &SvcArgs) -> Result<(), String> {
         ServiceName::Controller => {
             controller::shell::run(&crate::load_config(args.config.as_deref())?)
         }
+        // The shell applies cfg.services.mission itself.
+        ServiceName::Mission => mission::shell::run(&crate::load_config(args.config.as_deref())?),
         name => {
             let cfg = crate::load_config(args.config.as_deref())?;
             let rt = match name {
