@@ -89,8 +89,14 @@ pub(crate) fn validate(cfg: &Config) -> Result<(), String> {
     if let Some(cal) = &cfg.calibration {
         calibration(cal)?;
     }
+    cfg.vehicle.validate()?;
+    cfg.controller.validate()?;
+    cfg.mission.validate()?;
     service("services.adc_sampler", &cfg.services.adc_sampler)?;
     service("services.tension", &cfg.services.tension)?;
+    service("services.controller", &cfg.services.controller)?;
+    service("services.px4_bridge", &cfg.services.px4_bridge)?;
+    service("services.mission", &cfg.services.mission)?;
     let sup = &cfg.supervisor;
     positive("supervisor.backoff_initial_s", sup.backoff_initial_s)?;
     positive("supervisor.backoff_max_s", sup.backoff_max_s)?;
