@@ -22,6 +22,8 @@ pub enum ServiceName {
     Tension,
     /// The emulated force sensor: serves four MCP3423s on a Unix socket.
     SimSensor,
+    /// MAVLink link to PX4: AttitudeSetpoint -> SET_ATTITUDE_TARGET, telemetry -> VehicleState.
+    Px4Bridge,
 }
 
 impl ServiceName {
@@ -30,6 +32,7 @@ impl ServiceName {
             ServiceName::AdcSampler => "adc-sampler",
             ServiceName::Tension => "tension",
             ServiceName::SimSensor => "sim-sensor",
+            ServiceName::Px4Bridge => "px4-bridge",
         }
     }
 }
@@ -73,6 +76,10 @@ pub fn run(args: &SvcArgs) -> Result<(), String> {
     install_stop_handler();
     match args.name {
         ServiceName::SimSensor => run_sim_sensor(&args.sim),
+        // Applies cfg.services.px4_bridge itself (before starting its threads).
+        ServiceName::Px4Bridge => {
+            px4_bridge::shell::run(&crate::load_config(args.config.as_deref())?)
+        }
         name => {
             let cfg = crate::load_config(args.config.as_deref())?;
             let rt = match name {
