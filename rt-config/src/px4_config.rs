@@ -52,3 +52,151 @@ impl Default for Px4Config {
         }
     }
 }
+
+/// Where the bridge talks to PX4, parsed from [`Px4Config::link`].
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Px4Link {
+    /// `udpin:ADDR:PORT`: bind there, answer whoever sends PX4's frames.
+    UdpIn(std::net::SocketAddr),
+    /// `udpout:ADDR:PORT`: send there from an ephemeral port.
+    UdpOut(std::net::SocketAddr),
+    /// `serial:DEVICE:BAUD`.
+    Serial { device: String, baud: u32 },
+}
+
+impl Px4Config {
+    /// Parses `link` (`udpin:ADDR:PORT`, `udpout:ADDR:PORT`, `serial:DEVICE:BAUD`).
+    pub fn parse_link(&self) -> Result<Px4Link, String> {
+        let bad = |why: &str| format!("key `px4.link` = {:?}: {why}", self.link);
+        let (kind, rest) = self.link.split_once(':').ok_or_else(|| {
+            bad("expected udpin:ADDR:PORT, udpout:ADDR:PORT or serial:DEVICE:BAUD")
+        })?;
+        match kind {
+            "udpin" | "udpout" => {
+                let addr: std::net::SocketAddr = rest
+                    .parse()
+                    .map_err(|_| bad("expected an IP address and port, e.g. 127.0.0.1:14540"))?;
+                if addr.port() == 0 {
+                    return Err(bad("port 0 is not a fixed port"));
+                }
+                Ok(if kind == "udpin" {
+                    Px4Link::UdpIn(addr)
+                } else {
+                    Px4Link::UdpOut(addr)
+                })
+            }
+            "serial" => {
+                let (device, baud) = rest
+                    .rsplit_once(':')
+                    .ok_or_else(|| bad("expected serial:DEVICE:BAUD"))?;
+                let baud: u32 = baud
+                    .parse()
+                    .ok()
+                    .filter(|b| *b > 0)
+                    .ok_or_else(|| bad("the baud rate must be a positive integer"))?;
+                if device.is_empty() {
+                    return Err(bad("the serial device is empty"));
+                }
+                Ok(Px4Link::Serial {
+                    device: device.to_string(),
+                    baud,
+                })
+            }
+            _ => Err(bad(
+                "unknown link kind (udpin, udpout or serial; tcp is not supported)",
+            )),
+        }
+    }
+
+    /// Semantic checks; each problem names its key.
+    pub fn validate(&self) -> Result<(), String> {
+        self.parse_link()?;
+        for (key, v) in [
+            ("px4.system_id", self.system_id),
+            ("px4.target_system", self.target_system),
+        ] {
+            if v == 0 {
+                return Err(format!("key `{key}` = 0: system id 0 is the broadcast id"));
+            }
+        }
+        if self.system_id == self.target_system && self.component_id == self.target_component {
+            return Err(format!(
+                "key `px4.component_id` = {}: same system and component as the target PX4",
+                self.component_id
+            ));
+        }
+        let positive = [
+            ("px4.heartbeat_hz", self.heartbeat_hz),
+            ("px4.link_timeout_s", self.link_timeout_s),
+            ("px4.ack_timeout_s", self.ack_timeout_s),
+            ("px4.odometry_hz", self.odometry_hz),
+            ("px4.attitude_hz", self.attitude_hz),
+            ("px4.imu_hz", self.imu_hz),
+            ("px4.esc_hz", self.esc_hz),
+        ];
+        for (key, v) in positive {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(format!("key `{key}` = {v}: must be a positive number"));
+            }
+        }
+        for (key, v) in [
+            ("px4.odometry_hz", self.odometry_hz),
+            ("px4.attitude_hz", self.attitude_hz),
+            ("px4.imu_hz", self.imu_hz),
+            ("px4.esc_hz", self.esc_hz),
+        ] {
+            if v > 1000.0 {
+                return Err(format!("key `{key}` = {v}: above 1000 Hz"));
+            }
+        }
+        let s = self.stream_before_offboard_s;
+        if !(s.is_finite() && s > 1.0) {
+            return Err(format!(
+                "key `px4.stream_before_offboard_s` = {s}: PX4 wants the setpoint stream for more \
+                 than 1 s before offboard"
+            ));
+        }
+        if self.command_attempts == 0 {
+            return Err("key `px4.command_attempts` = 0: at least one send is needed".into());
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn links_parse_and_bad_values_name_their_key() {
+        let mut c = Px4Config::default();
+        assert!(c.validate().is_ok());
+        assert_eq!(
+            c.parse_link().unwrap(),
+            Px4Link::UdpIn("127.0.0.1:14540".parse().unwrap())
+        );
+        c.link = "serial:/dev/ttyAMA0:921600".into();
+        assert_eq!(
+            c.parse_link().unwrap(),
+            Px4Link::Serial {
+                device: "/dev/ttyAMA0".into(),
+                baud: 921600
+            }
+        );
+        c.link = "tcpout:1.2.3.4:5".into();
+        assert!(c.validate().unwrap_err().contains("px4.link"));
+        c = Px4Config {
+            stream_before_offboard_s: 0.8,
+            ..Px4Config::default()
+        };
+        assert!(c
+            .validate()
+            .unwrap_err()
+            .contains("px4.stream_before_offboard_s"));
+        c = Px4Config {
+            ack_timeout_s: f64::NAN,
+            ..Px4Config::default()
+        };
+        assert!(c.validate().unwrap_err().contains("px4.ack_timeout_s"));
+    }
+}

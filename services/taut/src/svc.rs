@@ -26,6 +26,8 @@ pub enum ServiceName {
     Controller,
     /// Scenario phases agreed with the peer drone over zenoh -> MissionSetpoint.
     Mission,
+    /// MAVLink link to PX4: AttitudeSetpoint -> SET_ATTITUDE_TARGET, telemetry -> VehicleState.
+    Px4Bridge,
 }
 
 impl ServiceName {
@@ -36,6 +38,7 @@ impl ServiceName {
             ServiceName::SimSensor => "sim-sensor",
             ServiceName::Controller => "controller",
             ServiceName::Mission => "mission",
+            ServiceName::Px4Bridge => "px4-bridge",
         }
     }
 }
@@ -85,6 +88,10 @@ pub fn run(args: &SvcArgs) -> Result<(), String> {
         }
         // The shell applies cfg.services.mission itself.
         ServiceName::Mission => mission::shell::run(&crate::load_config(args.config.as_deref())?),
+        // Applies cfg.services.px4_bridge itself (before starting its threads).
+        ServiceName::Px4Bridge => {
+            px4_bridge::shell::run(&crate::load_config(args.config.as_deref())?)
+        }
         name => {
             let cfg = crate::load_config(args.config.as_deref())?;
             let rt = match name {
