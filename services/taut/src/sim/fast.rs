@@ -18,8 +18,8 @@ use super::summary::Summary;
 use super::{new_recorder, Outcome, SimArgs};
 use adc_sampler::mcp3423::{Reading, SampleRate};
 use controller::ControllerStage;
-use mavlink::common::{MavMessage, COMMAND_ACK_DATA};
-use mavlink::MavHeader;
+use px4_bridge::mavlink::dialects::common::{MavMessage, MavResult, COMMAND_ACK_DATA};
+use px4_bridge::mavlink::MavHeader;
 use mission::{MissionStage, PeerSignal};
 use px4_bridge::{OffboardLink, Telemetry};
 use rt_config::Config;
@@ -150,7 +150,7 @@ impl FastDrone {
     /// A message from the emulated PX4 to the bridge.
     fn to_bridge(&mut self, t_ns: u64, msg: &MavMessage) {
         let header = MavHeader {
-            system_id: self.plant_link.system_id,
+            system_id: u32::from(self.plant_link.system_id),
             component_id: self.plant_link.component_id,
             sequence: 0,
         };
@@ -194,9 +194,9 @@ impl FastDrone {
                     match (stream, IntervalRequest::from_param_us(cmd.params[1])) {
                         (Some(stream), Some(req)) => {
                             self.streams.set(stream, req, t_ns);
-                            mavlink::common::MavResult::MAV_RESULT_ACCEPTED
+                            MavResult::MAV_RESULT_ACCEPTED
                         }
-                        _ => mavlink::common::MavResult::MAV_RESULT_DENIED,
+                        _ => MavResult::MAV_RESULT_DENIED,
                     }
                 } else {
                     plant
@@ -208,7 +208,7 @@ impl FastDrone {
                                 from: (self.cfg.px4.system_id, self.cfg.px4.component_id),
                             },
                         )
-                        .unwrap_or(mavlink::common::MavResult::MAV_RESULT_UNSUPPORTED)
+                        .unwrap_or(MavResult::MAV_RESULT_UNSUPPORTED)
                 };
                 let ack = MavMessage::COMMAND_ACK(COMMAND_ACK_DATA {
                     command: d.command,

@@ -21,7 +21,7 @@ use latency_tests::{Percentiles, SpanHistograms};
 use nalgebra::{UnitQuaternion, Vector3};
 use serde::Serialize;
 use shared_types::{
-    AttitudeSetpoint, ContactKind, MissionPhase, MissionSetpoint, PlantTruth, TensionSample,
+    AttitudeSetpoint, ContactKind, MissionPhase, MissionSetpoint, PlantTruth,
 };
 
 /// Window of the z steady-state error, s.
@@ -366,11 +366,6 @@ fn quat(wxyz: [f64; 4]) -> UnitQuaternion<f64> {
     UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
         wxyz[0], wxyz[1], wxyz[2], wxyz[3],
     ))
-}
-
-/// The cable force a tension sample reports, as the force the drone exerts on the cable, NED.
-pub fn tension_ned(sample: &TensionSample, attitude_wxyz: [f64; 4]) -> Vector3<f64> {
-    -(quat(attitude_wxyz) * Vector3::from(sample.force_body_n))
 }
 
 #[cfg(test)]

@@ -12,7 +12,7 @@ pub mod summary;
 
 use clap::Args;
 use metrics::MetricsRecorder;
-use shared_types::{MissionPhase, MissionSetpoint, PlantTruth};
+use shared_types::{MissionSetpoint, PlantTruth};
 use sim_plant::scenario::{PhaseKind, Scenario};
 use std::path::PathBuf;
 use summary::Summary;
@@ -153,9 +153,4 @@ impl Outcome {
             metrics: rec.finish(),
         }
     }
-}
-
-/// Whether a mission setpoint shows the drone flying a phase (not Idle).
-pub fn flying(m: &MissionSetpoint) -> bool {
-    m.phase != MissionPhase::Idle
 }
