@@ -81,6 +81,10 @@ pub struct ControllerConfig {
     /// Time constant with which the tension shift decays to zero while the mission has the
     /// tension loop off, s.
     pub tension_shift_decay_s: f64,
+    /// Anti-windup of the tension integral: while the measured tension is below this fraction
+    /// of T_d's magnitude the cable is taken as slack (the position cannot change the tension
+    /// linearly, like a saturated actuator) and e_T is not integrated; the P part still acts.
+    pub slack_tension_ratio: f64,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -116,6 +120,7 @@ impl Default for ControllerConfig {
             odometry_max_age_s: 0.1,
             mission_max_age_s: 0.2,
             tension_shift_decay_s: 1.0,
+            slack_tension_ratio: 0.3,
         }
     }
 }
@@ -223,7 +228,14 @@ impl ControllerConfig {
         positive(
             "controller.tension_shift_decay_s",
             self.tension_shift_decay_s,
-        )
+        )?;
+        if !(0.0..1.0).contains(&self.slack_tension_ratio) {
+            return Err(format!(
+                "key `controller.slack_tension_ratio` = {}: must lie in [0, 1)",
+                self.slack_tension_ratio
+            ));
+        }
+        Ok(())
     }
 }
 

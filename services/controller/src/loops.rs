@@ -30,6 +30,8 @@ pub struct ShiftGains {
     /// Bound per axis of the integral contribution and of the total shift, m.
     pub max_shift_m: Vector3<f64>,
     pub decay_tau_s: f64,
+    /// e_T is not integrated while |T_f| < slack_ratio · |T_d| (slack cable).
+    pub slack_ratio: f64,
 }
 
 /// ξ_d − ξ̄_d = K_TP e_T + K_TI ∫e_T dt − K_TD dT_f/dt, e_T = T_d − T_f (NED).
@@ -76,8 +78,12 @@ impl TensionShift {
     ) -> Vector3<f64> {
         let shift = match mode {
             ShiftMode::Active => {
-                let error = desired_ned_n - self.filter.value();
-                if integrate {
+                let measured = self.filter.value();
+                let error = desired_ned_n - measured;
+                // A slack cable is a saturated actuator: integrating its error would only wind
+                // up a shift that stays once the cable is taut (e_T = 0 at any height then).
+                let slack = measured.norm() < g.slack_ratio * desired_ned_n.norm();
+                if integrate && !slack {
                     self.integral_m += g.k_ti.component_mul(&error) * dt_s;
                     self.integral_m = clamp_each(&self.integral_m, &g.max_shift_m);
                 }

@@ -110,6 +110,7 @@ impl ControllerStage {
                 k_td: cfg.k_td.into(),
                 max_shift_m: cfg.max_tension_shift_m.into(),
                 decay_tau_s: cfg.tension_shift_decay_s,
+                slack_ratio: cfg.slack_tension_ratio,
             },
             velocity_gains: VelocityGains {
                 k_vp: cfg.k_vp.into(),

@@ -104,15 +104,15 @@ fn thrust_is_corrected_by_the_current_tilt() {
     assert!(attitude(&sp).angle_to(&level(0.0)) < 1e-9);
 }
 
-/// Slack (T_f = 0): e_T = T_d; z shift = 0.06 e_z + 0.18 e_z Σdt (up), y = 0.22 e_y + 0.08 ...
-/// (away from the peer, tightening the cable); the integral keeps climbing to the 0.5 m bound.
+/// Slack (T_f = 0): e_T = T_d; the P part moves the setpoint up (z shift 0.06 e_z < 0) and out
+/// (y shift 0.22 e_y, away from the peer, tightening the cable) at once. The integral does not
+/// wind up on a slack cable (anti-windup): the shift stays the P part.
 #[test]
 fn slack_cable_moves_the_setpoint_up_and_out() {
     let mut s = stage();
     let q = level(0.0);
     let e = t_d();
     assert!(e.z < -4.9 && e.y < -1.3);
-    let mut last = 0.0;
     for k in 0..100u64 {
         let t = k * DT_NS;
         let ten = tension(t, &Vector3::zeros(), &q);
@@ -123,15 +123,39 @@ fn slack_cable_moves_the_setpoint_up_and_out() {
             Some(&mission(t, 0.0, ON)),
         );
         let sh = shift(&sp);
+        assert!((sh.z - 0.06 * e.z).abs() < 1e-9, "step {k}: {} vs {}", sh.z, 0.06 * e.z);
+        assert!((sh.y - 0.22 * e.y).abs() < 1e-9, "step {k}: {}", sh.y);
+        assert!(sh.z < -0.29 && sh.y < -0.29);
+        assert_eq!(sp.tension_origin_ns, t);
+        assert_eq!(sp.header.t_origin_ns, t);
+    }
+}
+
+/// A cable carrying half its share (taut, T_f = T_d / 2): e_T = T_d / 2 is integrated, so the
+/// setpoint keeps climbing, z shift = 0.06 e_z + 0.18 e_z Σdt, up to the 0.5 m bound.
+#[test]
+fn light_cable_keeps_climbing_until_it_takes_its_share() {
+    let mut s = stage();
+    let q = level(0.0);
+    let e = 0.5 * t_d();
+    let mut last = 0.0;
+    for k in 0..300u64 {
+        let t = k * DT_NS;
+        let ten = tension(t, &(0.5 * t_d()), &q);
+        let sp = s.step(
+            t,
+            &vehicle_at(t, OWN, &q),
+            Some(&ten),
+            Some(&mission(t, 0.0, ON)),
+        );
+        let sh = shift(&sp);
         let n = (k + 1) as f64 * 0.01;
-        let z = (0.06 * e.z + 0.18 * e.z * n).max(-0.5);
+        let z = (0.06 * e.z + (0.18 * e.z * n).max(-0.5)).max(-0.5);
         let y = 0.22 * e.y + 0.08 * e.y * n;
         assert!((sh.z - z).abs() < 1e-9, "step {k}: {} vs {z}", sh.z);
         assert!((sh.y - y).abs() < 1e-9, "step {k}: {} vs {y}", sh.y);
         assert!(sh.z <= last);
         last = sh.z;
-        assert_eq!(sp.tension_origin_ns, t);
-        assert_eq!(sp.header.t_origin_ns, t);
     }
     assert!((last + 0.5).abs() < 1e-12);
 }
@@ -161,10 +185,11 @@ fn stronger_pull_makes_it_yield_down_and_towards_the_pull() {
 fn stale_tension_freezes_the_integral() {
     let mut s = stage();
     let q = level(0.0);
-    let e = t_d();
+    // A taut cable carrying half its share, so the integral runs.
+    let e = 0.5 * t_d();
     for k in 0..10u64 {
         let t = k * DT_NS;
-        let ten = tension(t, &Vector3::zeros(), &q);
+        let ten = tension(t, &(0.5 * t_d()), &q);
         s.step(
             t,
             &vehicle_at(t, OWN, &q),
@@ -172,7 +197,7 @@ fn stale_tension_freezes_the_integral() {
             Some(&mission(t, 0.0, ON)),
         );
     }
-    let old = tension(9 * DT_NS, &Vector3::zeros(), &q);
+    let old = tension(9 * DT_NS, &(0.5 * t_d()), &q);
     // The old sample stays fresh (age <= 50 ms) up to step 14: 15 integrating steps in all.
     let integral = 0.18 * e.z * 0.01 * 15.0;
     for k in 10..40u64 {

@@ -255,10 +255,14 @@ pub fn run(args: &SimArgs, scenario: &Scenario) -> Result<Summary, String> {
     let wall = Instant::now();
     let mut next_truth_ns = 0;
     let mut next_hold_ns = 0;
+    let mut trace = match &args.trace {
+        Some(p) => Some(Trace::create(p)?),
+        None => None,
+    };
     while plant.time_ns() < limit_ns {
         plant.step();
         let t = plant.time_ns();
-        fly_companions(&mut plant, &mut drones, &mut rec, t, &mut next_hold_ns);
+        fly_companions(&mut plant, &mut drones, &mut rec, t, &mut next_hold_ns, &mut trace);
         if t >= next_truth_ns {
             next_truth_ns += TRUTH_PERIOD_NS;
             let mut truth = plant.truth();
@@ -290,6 +294,7 @@ fn fly_companions(
     rec: &mut MetricsRecorder,
     t: u64,
     next_hold_ns: &mut u64,
+    trace: &mut Option<Trace>,
 ) {
     let drive_sensor = t >= *next_hold_ns;
     if drive_sensor {
@@ -363,8 +368,67 @@ fn fly_companions(
         );
         sp.header.t_publish_ns = t;
         rec.on_setpoint(k, &sp, false);
+        if let Some(tr) = trace.as_mut() {
+            tr.row(t, k, &state, &sp, &plant.truth());
+        }
         if let Some(msg) = d.link.on_setpoint(t, &sp) {
             d.to_plant(plant, k, t, &msg);
         }
+    }
+}
+
+/// A CSV of every controller step, for looking at a flight.
+struct Trace {
+    out: std::io::BufWriter<std::fs::File>,
+}
+
+impl Trace {
+    fn create(path: &std::path::Path) -> Result<Self, String> {
+        use std::io::Write;
+        let f = std::fs::File::create(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let mut out = std::io::BufWriter::new(f);
+        writeln!(
+            out,
+            "t_s,drone,phase,flags,x,y,z,true_x,true_y,true_z,nom_x,nom_y,nom_z,sh_x,sh_y,sh_z,\
+             td_x,td_y,td_z,tf_x,tf_y,tf_z,ad_x,ad_y,ad_z,thrust_n,payload_x,payload_y,payload_z,\
+             cable_n"
+        )
+        .map_err(|e| e.to_string())?;
+        Ok(Trace { out })
+    }
+
+    fn row(
+        &mut self,
+        t: u64,
+        k: usize,
+        s: &VehicleState,
+        sp: &AttitudeSetpoint,
+        truth: &shared_types::PlantTruth,
+    ) {
+        use std::io::Write;
+        let v = |a: &[f64]| {
+            a.iter()
+                .map(|x| format!("{x:.4}"))
+                .collect::<Vec<_>>()
+                .join(",")
+        };
+        let _ = writeln!(
+            self.out,
+            "{:.3},{},{},{},{},{},{},{},{},{},{},{:.3},{},{:.3}",
+            t as f64 * 1e-9,
+            k,
+            sp.phase as u32,
+            sp.flags,
+            v(&s.position_ned_m),
+            v(&truth.drones[k].body.position_ned_m),
+            v(&sp.nominal_position_ned_m),
+            v(&sp.shifted_position_ned_m),
+            v(&sp.tension_desired_ned_n),
+            v(&sp.tension_filtered_ned_n),
+            v(&sp.acceleration_desired_ned_m_s2),
+            sp.thrust_n,
+            v(&truth.payload.position_ned_m),
+            truth.cable_tension_n[k],
+        );
     }
 }

@@ -10,7 +10,8 @@
 //!   seconds before the next Move phase starts or the flight ends (so for Test A it is the end
 //!   of the hold that follows the move); reported for the last Move phase.
 //! - Tension tracking: the true cable force the drone exerts on the cable (−R·anchor pull, NED)
-//!   against the controller's T_d, over controller steps with the tension loop on (T_d ≠ 0).
+//!   against the controller's T_d, over controller steps while the mission has the tension loop
+//!   on (Test A: from the move on; the cables are meant to be slack during take-off).
 //! - Swing: the pendulum angle of the payload about the line through the two drones' cable
 //!   anchors (the angle between the anchors-to-payload plane and the vertical plane through
 //!   that line). Along-the-line offsets (unequal heights, noise) are a stiff mode of the taut
@@ -198,8 +199,11 @@ impl MetricsRecorder {
         }
         // Tension tracking against the truth of the same instant (the newest truth sample).
         let Some(truth) = &self.last_truth else { return };
+        let loop_on = acc
+            .mission
+            .is_some_and(|m| m.flags & shared_types::mission_flags::TENSION_ENABLED != 0);
         let td = Vector3::from(sp.tension_desired_ned_n);
-        if td.norm() > 0.0 {
+        if loop_on && td.norm() > 0.0 {
             let d = &truth.drones[k];
             let q = quat(d.body.attitude_wxyz);
             let t_true = -(q * Vector3::from(d.anchor_force_frd_n));

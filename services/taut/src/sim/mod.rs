@@ -38,6 +38,9 @@ pub struct SimArgs {
     /// (default: the scenario's phase timeouts plus 30 s).
     #[arg(long)]
     pub time_limit: Option<f64>,
+    /// Fast mode: write every controller step of both drones to this CSV (for plots).
+    #[arg(long)]
+    pub trace: Option<PathBuf>,
 }
 
 impl SimArgs {

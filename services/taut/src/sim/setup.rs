@@ -6,6 +6,9 @@ use sim_plant::scenario::Scenario;
 use std::net::{TcpListener, UdpSocket};
 use std::path::{Path, PathBuf};
 
+/// The emulated sensor's calibration (see the file's header).
+pub const SIM_CALIBRATION: &str = include_str!("../../../../configs/sim-calibration.toml");
+
 /// Loopback ports of one run: MAVLink (companion side 14540-like, plant side 14580-like, each
 /// +i per drone) and one zenoh listener per drone.
 #[derive(Debug, Clone, Copy)]
@@ -67,6 +70,7 @@ pub fn drone_config(
     ports: &Ports,
 ) -> Config {
     let mut cfg = Config::embedded_sim();
+    cfg.calibration = Some(sim_calibration());
     let id = scenario.drones[k].id.clone();
     let peer = scenario.drones[1 - k].id.clone();
     cfg.uav = id.clone();
@@ -109,5 +113,26 @@ pub fn scenario_arg_for_children(arg: &str) -> String {
             .unwrap_or_else(|_| arg.to_string())
     } else {
         arg.to_string()
+    }
+}
+
+/// The `[calibration]` table of [`SIM_CALIBRATION`].
+pub fn sim_calibration() -> rt_config::CalibrationConfig {
+    #[derive(serde::Deserialize)]
+    struct File {
+        calibration: rt_config::CalibrationConfig,
+    }
+    toml::from_str::<File>(SIM_CALIBRATION)
+        .expect("configs/sim-calibration.toml is checked by a unit test")
+        .calibration
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn the_sim_calibration_parses_and_is_not_identity() {
+        let c = super::sim_calibration();
+        assert_ne!(c, rt_config::CalibrationConfig::identity());
+        assert!(c.cell_gain.iter().all(|g| (g - 1.0).abs() < 0.05));
     }
 }
