@@ -187,7 +187,9 @@ impl MetricsRecorder {
         {
             acc.position_only += 1;
         }
-        if realtime {
+        // Latency of flight setpoints only: before arming PX4 streams odometry at its 30 Hz
+        // default and the controller runs on its fallback deadline.
+        if realtime && sp.flags & shared_types::setpoint_flags::IDLE == 0 {
             let t = sp.header.t_publish_ns;
             if sp.tension_origin_ns > 0 {
                 self.spans.record_span(SPANS[2 * k], sp.tension_origin_ns, t);

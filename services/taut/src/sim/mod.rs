@@ -38,9 +38,18 @@ pub struct SimArgs {
     /// (default: the scenario's phase timeouts plus 30 s).
     #[arg(long)]
     pub time_limit: Option<f64>,
+    /// What wakes the controller (default: the embedded config's, `odometry`).
+    #[arg(long, value_enum)]
+    pub controller_trigger: Option<Trigger>,
     /// Fast mode: write every controller step of both drones to this CSV (for plots).
     #[arg(long)]
     pub trace: Option<PathBuf>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Trigger {
+    Odometry,
+    Timer,
 }
 
 impl SimArgs {

@@ -30,7 +30,16 @@ pub fn run(args: &SimArgs, scenario: &Scenario, out: &Path) -> Result<Summary, S
     std::fs::create_dir_all(&logs).map_err(|e| format!("{}: {e}", logs.display()))?;
     let ports = Ports::pick()?;
     let scenario_arg = scenario_arg_for_children(&args.scenario);
-    let cfgs = [0, 1].map(|k| drone_config(&scenario_arg, scenario, k, &run_id, &socket_dir, &ports));
+    let cfgs = [0, 1].map(|k| {
+        let mut c = drone_config(&scenario_arg, scenario, k, &run_id, &socket_dir, &ports);
+        if let Some(t) = args.controller_trigger {
+            c.controller.trigger = match t {
+                super::Trigger::Odometry => rt_config::ControllerTrigger::Odometry,
+                super::Trigger::Timer => rt_config::ControllerTrigger::Timer,
+            };
+        }
+        c
+    });
     let cfg_paths = write_configs(out, &cfgs)?;
 
     let mut sup = Supervisor::new(cfgs[0].supervisor)?.log_to(&logs);
