@@ -5,8 +5,8 @@
 mod config;
 mod controller_config;
 mod mission_config;
-mod px4_config;
 pub mod periodic;
+mod px4_config;
 pub mod rt;
 mod validate;
 

@@ -123,7 +123,12 @@ fn slack_cable_moves_the_setpoint_up_and_out() {
             Some(&mission(t, 0.0, ON)),
         );
         let sh = shift(&sp);
-        assert!((sh.z - 0.06 * e.z).abs() < 1e-9, "step {k}: {} vs {}", sh.z, 0.06 * e.z);
+        assert!(
+            (sh.z - 0.06 * e.z).abs() < 1e-9,
+            "step {k}: {} vs {}",
+            sh.z,
+            0.06 * e.z
+        );
         assert!((sh.y - 0.22 * e.y).abs() < 1e-9, "step {k}: {}", sh.y);
         assert!(sh.z < -0.29 && sh.y < -0.29);
         assert_eq!(sp.tension_origin_ns, t);

@@ -201,7 +201,7 @@ pub fn measure(args: &SensorArgs, show: &mut dyn FnMut(&str)) -> Result<SensorSu
             sup.start(ServiceSpec::svc("sim-sensor", sim_args(&emulator)))?;
             wait_for_socket(emulator.socket.as_ref().expect("set above"))?;
         }
-        for spec in crate::supervisor::drone_services(&cfg_path) {
+        for spec in crate::supervisor::sensor_services(&cfg_path) {
             sup.start(spec)?;
         }
         collect(args, &cfg, &mut sup, profile_vertices(&profile), t0, show)

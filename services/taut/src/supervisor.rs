@@ -197,11 +197,29 @@ impl Supervisor {
     }
 }
 
-/// The services of one drone, started with `config_path`.
+/// The force-sensing chain of one drone (`taut sensor`), started with `config_path`.
+pub fn sensor_services(config_path: &Path) -> Vec<ServiceSpec> {
+    services(config_path, &["adc-sampler", "tension"])
+}
+
+/// Every service of one drone (`taut launch`), in start order.
+pub const FLIGHT_SERVICES: [&str; 5] = [
+    "adc-sampler",
+    "tension",
+    "px4-bridge",
+    "controller",
+    "mission",
+];
+
+/// The whole flight stack of one drone, started with `config_path`.
 pub fn drone_services(config_path: &Path) -> Vec<ServiceSpec> {
+    services(config_path, &FLIGHT_SERVICES)
+}
+
+fn services(config_path: &Path, names: &[&str]) -> Vec<ServiceSpec> {
     let cfg = config_path.display().to_string();
-    ["adc-sampler", "tension"]
-        .into_iter()
+    names
+        .iter()
         .map(|name| ServiceSpec::svc(name, vec!["--config".into(), cfg.clone()]))
         .collect()
 }
@@ -215,8 +233,9 @@ pub fn launch(config_path: &Path) -> Result<(), String> {
         sup.start(spec)?;
     }
     eprintln!(
-        "[launch] {}: adc-sampler, tension running (Ctrl-C to stop)",
-        cfg.uav
+        "[launch] {}: {} running (Ctrl-C to stop)",
+        cfg.uav,
+        FLIGHT_SERVICES.join(", ")
     );
     let verdict = loop {
         if stop_requested() {

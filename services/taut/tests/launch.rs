@@ -34,6 +34,18 @@ fn children(parent: u32, needle: &str) -> Vec<u32> {
     out
 }
 
+/// iceoryx2 nodes of a running drone: one per service, two for the bridge.
+const NODES: usize = 6;
+
+/// A free TCP/UDP port number on loopback (probed by binding).
+fn free_port() -> u16 {
+    std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port()
+}
+
 fn wait_for(what: &str, timeout: Duration, mut f: impl FnMut() -> bool) {
     let end = Instant::now() + timeout;
     while !f() {
@@ -85,7 +97,21 @@ fn launch_restarts_a_crashed_service_and_stops_cleanly() {
         "sim:/tmp/taut-uav1-i2c.sock",
         &format!("sim:{}", socket.display()),
     )
-    .replace("backoff_initial_s = 0.1", "backoff_initial_s = 0.2");
+    .replace("backoff_initial_s = 0.1", "backoff_initial_s = 0.2")
+    // The whole flight stack starts; with no PX4 and no peer it waits in Idle. Its own ports.
+    .replace("drone = \"\"", "drone = \"uav1\"")
+    .replace(
+        "udpin:127.0.0.1:14540",
+        &format!("udpin:127.0.0.1:{}", free_port()),
+    )
+    .replace(
+        "tcp/127.0.0.1:7447",
+        &format!("tcp/127.0.0.1:{}", free_port()),
+    )
+    .replace(
+        "tcp/127.0.0.1:7448",
+        &format!("tcp/127.0.0.1:{}", free_port()),
+    );
     let cfg_path = dir.join("drone.toml");
     std::fs::write(&cfg_path, cfg).unwrap();
 
@@ -106,11 +132,20 @@ fn launch_restarts_a_crashed_service_and_stops_cleanly() {
         .spawn()
         .unwrap();
     let lp = launch.id();
-    wait_for("both services", Duration::from_secs(10), || {
-        !children(lp, "adc-sampler").is_empty() && !children(lp, "tension").is_empty()
+    wait_for("all five services", Duration::from_secs(10), || {
+        [
+            "adc-sampler",
+            "tension",
+            "px4-bridge",
+            "controller",
+            "mission",
+        ]
+        .iter()
+        .all(|s| !children(lp, s).is_empty())
     });
+    // One node per service, two for the bridge (receive and send threads).
     wait_for("their nodes", Duration::from_secs(10), || {
-        nodes_named(&uav) == 2
+        nodes_named(&uav) == NODES
     });
 
     // A crash: SIGKILL leaves the sampler's iceoryx2 node behind; the restart cleans it up.
@@ -120,7 +155,7 @@ fn launch_restarts_a_crashed_service_and_stops_cleanly() {
         children(lp, "adc-sampler").iter().any(|&p| p != first)
     });
     wait_for("dead node cleanup", Duration::from_secs(10), || {
-        nodes_named(&uav) == 2
+        nodes_named(&uav) == NODES
     });
 
     kill(lp, 15);

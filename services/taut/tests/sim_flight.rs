@@ -37,9 +37,16 @@ fn fly(args: &[&str], out: &Path) -> (bool, Value) {
     let stdout = String::from_utf8_lossy(&output.stdout);
     let stderr = String::from_utf8_lossy(&output.stderr);
     eprintln!("--- taut sim {args:?}\n{stdout}{stderr}");
-    let text = std::fs::read_to_string(out.join("summary.json"))
-        .unwrap_or_else(|e| panic!("no summary.json in {}: {e}\n{stdout}{stderr}", out.display()));
-    (output.status.success(), serde_json::from_str(&text).unwrap())
+    let text = std::fs::read_to_string(out.join("summary.json")).unwrap_or_else(|e| {
+        panic!(
+            "no summary.json in {}: {e}\n{stdout}{stderr}",
+            out.display()
+        )
+    });
+    (
+        output.status.success(),
+        serde_json::from_str(&text).unwrap(),
+    )
 }
 
 fn f(v: &Value, path: &[&str]) -> f64 {
@@ -64,7 +71,10 @@ fn check_test_a(ok: bool, s: &Value) {
     assert_eq!(s["success"], true);
     assert_eq!(s["failsafe_fired"], false);
     assert_eq!(s["crashed"], false);
-    assert!(f(s, &["payload", "lifted_at_s"]) > 0.0, "the payload never left the box");
+    assert!(
+        f(s, &["payload", "lifted_at_s"]) > 0.0,
+        "the payload never left the box"
+    );
     let settle = f(s, &["payload", "settling_time_s"]);
     assert!(
         settle <= TEST_A_SETTLING_BOUND_S,
@@ -79,7 +89,9 @@ fn check_test_a(ok: bool, s: &Value) {
 
 #[test]
 fn test_a_real_time_then_fast_agree() {
-    let _one = ONE_FLIGHT_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let _one = ONE_FLIGHT_AT_A_TIME
+        .lock()
+        .unwrap_or_else(|e| e.into_inner());
     let rt_out = out_dir("a-rt");
     let (ok, rt) = fly(&["test-a", "--seed", "1"], &rt_out);
     check_test_a(ok, &rt);
@@ -92,7 +104,10 @@ fn test_a_real_time_then_fast_agree() {
     let fast_out = out_dir("a-fast");
     let (ok, fast) = fly(&["test-a", "--seed", "1", "--fast"], &fast_out);
     check_test_a(ok, &fast);
-    assert!(f(&fast, &["sim_s"]) / f(&fast, &["wall_s"]) >= 100.0, "fast mode below 100x");
+    assert!(
+        f(&fast, &["sim_s"]) / f(&fast, &["wall_s"]) >= 100.0,
+        "fast mode below 100x"
+    );
 
     // Comparable: same phases in the same order, and the metrics within tolerances that cover
     // what differs (scheduling delays of 0.1-5 ms, sensor read at nominal instants, the real
@@ -151,7 +166,9 @@ fn test_a_real_time_then_fast_agree() {
 
 #[test]
 fn test_b_round_trip_in_real_time() {
-    let _one = ONE_FLIGHT_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let _one = ONE_FLIGHT_AT_A_TIME
+        .lock()
+        .unwrap_or_else(|e| e.into_inner());
     let out = out_dir("b-rt");
     let (ok, s) = fly(&["test-b", "--seed", "1"], &out);
     assert!(ok, "taut sim test-b failed: {s:#}");
@@ -160,7 +177,11 @@ fn test_b_round_trip_in_real_time() {
     let phases = s["phases"].as_array().unwrap();
     assert_eq!(phases.len(), 4);
     for p in phases {
-        assert!(p["start_s"][0].is_number(), "phase {} never started", p["name"]);
+        assert!(
+            p["start_s"][0].is_number(),
+            "phase {} never started",
+            p["name"]
+        );
     }
     for k in 0..2 {
         let e = drone(&s, k, "final_position_error_m");

@@ -18,9 +18,9 @@ use super::summary::Summary;
 use super::{new_recorder, Outcome, SimArgs};
 use adc_sampler::mcp3423::{Reading, SampleRate};
 use controller::ControllerStage;
+use mission::{MissionStage, PeerSignal};
 use px4_bridge::mavlink::dialects::common::{MavMessage, MavResult, COMMAND_ACK_DATA};
 use px4_bridge::mavlink::MavHeader;
-use mission::{MissionStage, PeerSignal};
 use px4_bridge::{OffboardLink, Telemetry};
 use rt_config::Config;
 use shared_types::{
@@ -81,8 +81,8 @@ impl FastDrone {
         .map_err(|e| e.to_string())?;
         let controller = ControllerStage::new(&cfg.vehicle, &cfg.controller)
             .map_err(|e| format!("{}: {e}", cfg.uav))?;
-        let mission =
-            MissionStage::new(scenario, k, &cfg.mission).map_err(|e| format!("{}: {e}", cfg.uav))?;
+        let mission = MissionStage::new(scenario, k, &cfg.mission)
+            .map_err(|e| format!("{}: {e}", cfg.uav))?;
         let link =
             OffboardLink::new(&cfg.px4, &cfg.vehicle).map_err(|e| format!("{}: {e}", cfg.uav))?;
         let plant_link = LinkConfig::px4_sitl(k as u8);
@@ -121,7 +121,9 @@ impl FastDrone {
         for (c, addr) in addresses.iter().enumerate() {
             let mut buf = [0u8; 3];
             let read = self.sensor.read(*addr, &mut buf, t_ns);
-            let reading = read.ok().and_then(|_| Reading::decode(SampleRate::Sps240Bits12, &buf));
+            let reading = read
+                .ok()
+                .and_then(|_| Reading::decode(SampleRate::Sps240Bits12, &buf));
             frame.status[c] = match reading {
                 Some(r) if r.ready => {
                     self.last_codes[c] = r.code as i16;
@@ -262,7 +264,14 @@ pub fn run(args: &SimArgs, scenario: &Scenario) -> Result<Summary, String> {
     while plant.time_ns() < limit_ns {
         plant.step();
         let t = plant.time_ns();
-        fly_companions(&mut plant, &mut drones, &mut rec, t, &mut next_hold_ns, &mut trace);
+        fly_companions(
+            &mut plant,
+            &mut drones,
+            &mut rec,
+            t,
+            &mut next_hold_ns,
+            &mut trace,
+        );
         if t >= next_truth_ns {
             next_truth_ns += TRUTH_PERIOD_NS;
             let mut truth = plant.truth();
@@ -342,22 +351,35 @@ fn fly_companions(
         drones[k].next_mission_ns += drones[k].mission_period_ns;
         let peer_signal = drones[1 - k].last_signal;
         let d = &mut drones[k];
-        let out = d.mission.step(t, d.newest_state.as_ref(), peer_signal.as_ref().map(|s| (s, t)));
+        let out = d.mission.step(
+            t,
+            d.newest_state.as_ref(),
+            peer_signal.as_ref().map(|s| (s, t)),
+        );
         let mut sp = out.setpoint;
         sp.header.t_publish_ns = t;
         d.newest_mission = Some(sp);
         d.last_signal = Some(out.signal);
         if let Some((i, name, ts)) = rec.on_mission(k, &sp) {
-            println!("[sim] drone {} phase {i} {name} started at {ts:.2} s", k + 1);
+            println!(
+                "[sim] drone {} phase {i} {name} started at {ts:.2} s",
+                k + 1
+            );
         }
     }
     // Controllers: on odometry, or on their deadline when it is late (as the service does).
     for (k, d) in drones.iter_mut().enumerate() {
         let due = d.state_pending || t >= d.next_controller_ns + d.controller_period_ns / 2;
-        if !due || t < d.next_controller_ns.saturating_sub(d.controller_period_ns / 2) {
+        if !due
+            || t < d
+                .next_controller_ns
+                .saturating_sub(d.controller_period_ns / 2)
+        {
             continue;
         }
-        let Some(state) = d.newest_state else { continue };
+        let Some(state) = d.newest_state else {
+            continue;
+        };
         d.state_pending = false;
         d.next_controller_ns = t + d.controller_period_ns;
         let mut sp: AttitudeSetpoint = d.controller.step(

@@ -21,9 +21,7 @@
 use latency_tests::{Percentiles, SpanHistograms};
 use nalgebra::{UnitQuaternion, Vector3};
 use serde::Serialize;
-use shared_types::{
-    AttitudeSetpoint, ContactKind, MissionPhase, MissionSetpoint, PlantTruth,
-};
+use shared_types::{AttitudeSetpoint, ContactKind, MissionPhase, MissionSetpoint, PlantTruth};
 
 /// Window of the z steady-state error, s.
 pub const STEADY_WINDOW_S: f64 = 3.0;
@@ -192,7 +190,8 @@ impl MetricsRecorder {
         if realtime && sp.flags & shared_types::setpoint_flags::IDLE == 0 {
             let t = sp.header.t_publish_ns;
             if sp.tension_origin_ns > 0 {
-                self.spans.record_span(SPANS[2 * k], sp.tension_origin_ns, t);
+                self.spans
+                    .record_span(SPANS[2 * k], sp.tension_origin_ns, t);
             }
             if sp.odometry_origin_ns > 0 {
                 self.spans
@@ -200,7 +199,9 @@ impl MetricsRecorder {
             }
         }
         // Tension tracking against the truth of the same instant (the newest truth sample).
-        let Some(truth) = &self.last_truth else { return };
+        let Some(truth) = &self.last_truth else {
+            return;
+        };
         let loop_on = acc
             .mission
             .is_some_and(|m| m.flags & shared_types::mission_flags::TENSION_ENABLED != 0);
@@ -302,10 +303,12 @@ impl MetricsRecorder {
                 let a = &self.drones[k];
                 let rms = |s: f64, n: u64| (n > 0).then(|| (s / n as f64).sqrt());
                 let z_ss = last_move.and_then(|mi| {
-                    let in_move: Vec<_> =
-                        a.z_err.iter().filter(|(_, _, p)| *p as usize >= mi).collect();
-                    let end = next_move_start
-                        .or_else(|| in_move.last().map(|(t, _, _)| *t))?;
+                    let in_move: Vec<_> = a
+                        .z_err
+                        .iter()
+                        .filter(|(_, _, p)| *p as usize >= mi)
+                        .collect();
+                    let end = next_move_start.or_else(|| in_move.last().map(|(t, _, _)| *t))?;
                     let w: Vec<f64> = in_move
                         .iter()
                         .filter(|(t, _, _)| *t <= end && *t > end - STEADY_WINDOW_S)
@@ -332,7 +335,13 @@ impl MetricsRecorder {
                 .flatten()
         });
         let window: Vec<(f64, f64)> = swing_from_s
-            .map(|t0| self.swing.iter().filter(|(t, _)| *t >= t0).copied().collect())
+            .map(|t0| {
+                self.swing
+                    .iter()
+                    .filter(|(t, _)| *t >= t0)
+                    .copied()
+                    .collect()
+            })
             .unwrap_or_default();
         let n = window.len() as f64;
         let settling_time_s = swing_from_s.and_then(|t0| {

@@ -33,7 +33,12 @@ fn truth(t_s: f64, dx: f64, dy: f64, contact: ContactKind) -> PlantTruth {
 fn swing_is_the_pendulum_angle_about_the_anchor_line() {
     let r = recorder();
     assert!(r.swing_deg(&truth(0.0, 0.0, 0.0, ContactKind::Free)).abs() < 1e-9);
-    let a = r.swing_deg(&truth(0.0, 1.2 * 10f64.to_radians().tan(), 0.0, ContactKind::Free));
+    let a = r.swing_deg(&truth(
+        0.0,
+        1.2 * 10f64.to_radians().tan(),
+        0.0,
+        ContactKind::Free,
+    ));
     assert!((a - 10.0).abs() < 1e-9, "{a}");
     // Along the line: not a swing.
     assert!(r.swing_deg(&truth(0.0, 0.0, 0.3, ContactKind::Free)).abs() < 1e-9);

@@ -121,7 +121,11 @@ impl Outcome {
     pub fn observe_truth(&mut self, t: &PlantTruth) {
         for (k, d) in t.drones.iter().enumerate() {
             if d.crash_flags != 0 {
-                self.fail(format!("drone {} crashed (crash flags {:#x})", k + 1, d.crash_flags));
+                self.fail(format!(
+                    "drone {} crashed (crash flags {:#x})",
+                    k + 1,
+                    d.crash_flags
+                ));
             }
             if d.failsafe_count > 0 {
                 self.fail(format!("PX4 failsafe fired on drone {}", k + 1));

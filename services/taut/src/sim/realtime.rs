@@ -7,15 +7,13 @@ use super::setup::{drone_config, scenario_arg_for_children, write_configs, Ports
 use super::summary::Summary;
 use super::{new_recorder, Outcome, SimArgs};
 use crate::supervisor::{ServiceSpec, Supervisor, Verdict};
-use shared_types::{mission_flags, names, AttitudeSetpoint, MissionPhase, MissionSetpoint, PlantTruth};
+use shared_types::{
+    mission_flags, names, AttitudeSetpoint, MissionPhase, MissionSetpoint, PlantTruth,
+};
 use sim_plant::scenario::Scenario;
 use std::path::Path;
 use std::time::{Duration, Instant};
 use taut_ipc::{stop_requested, Ipc, TopicSubscriber};
-
-/// The drone services, in start order (consumers after producers do not matter with iceoryx2,
-/// but the sampler needs the plant's sensor socket).
-pub const DRONE_SERVICES: [&str; 5] = ["adc-sampler", "tension", "px4-bridge", "controller", "mission"];
 
 struct DroneTopics {
     mission: TopicSubscriber<MissionSetpoint>,
@@ -73,7 +71,7 @@ pub fn run(args: &SimArgs, scenario: &Scenario, out: &Path) -> Result<Summary, S
             wait_for_file(&socket_dir.join(format!("taut-{}-i2c.sock", d.id)))?;
         }
         for (k, path) in cfg_paths.iter().enumerate() {
-            for svc in DRONE_SERVICES {
+            for svc in crate::supervisor::FLIGHT_SERVICES {
                 let mut spec =
                     ServiceSpec::svc(svc, vec!["--config".into(), path.display().to_string()]);
                 spec.name = format!("{}-{svc}", cfgs[k].uav);
@@ -85,7 +83,13 @@ pub fn run(args: &SimArgs, scenario: &Scenario, out: &Path) -> Result<Summary, S
     sup.stop_all(Duration::from_secs(3));
     let _ = std::fs::remove_dir_all(&socket_dir);
     let (outcome, recorder) = result?;
-    Ok(outcome.summary(args, scenario, "real-time", &recorder, wall.elapsed().as_secs_f64()))
+    Ok(outcome.summary(
+        args,
+        scenario,
+        "real-time",
+        &recorder,
+        wall.elapsed().as_secs_f64(),
+    ))
 }
 
 fn wait_for_file(path: &Path) -> Result<(), String> {
@@ -116,8 +120,12 @@ fn monitor(
     for d in &scenario.drones {
         let ipc = Ipc::new(&format!("{node}-{}", d.id), root, &d.id).map_err(|e| e.to_string())?;
         drones.push(DroneTopics {
-            mission: ipc.subscriber(names::MISSION_SETPOINT).map_err(|e| e.to_string())?,
-            setpoint: ipc.subscriber(names::ATTITUDE_SETPOINT).map_err(|e| e.to_string())?,
+            mission: ipc
+                .subscriber(names::MISSION_SETPOINT)
+                .map_err(|e| e.to_string())?,
+            setpoint: ipc
+                .subscriber(names::ATTITUDE_SETPOINT)
+                .map_err(|e| e.to_string())?,
         });
         ipcs.push(ipc);
     }
@@ -135,14 +143,20 @@ fn monitor(
         for (k, d) in drones.iter().enumerate() {
             let mut f = |m: MissionSetpoint| {
                 if let Some((i, name, t)) = rec.on_mission(k, &m) {
-                    println!("[sim] {} phase {i} {name} started at {t:.2} s", scenario.drones[k].id);
+                    println!(
+                        "[sim] {} phase {i} {name} started at {t:.2} s",
+                        scenario.drones[k].id
+                    );
                 }
                 last_phase[k] = Some(m);
             };
             if let Err(e) = d.mission.drain(&mut f) {
                 err = Some(e.to_string());
             }
-            if let Err(e) = d.setpoint.drain(&mut |s: AttitudeSetpoint| rec.on_setpoint(k, &s, true)) {
+            if let Err(e) = d
+                .setpoint
+                .drain(&mut |s: AttitudeSetpoint| rec.on_setpoint(k, &s, true))
+            {
                 err = Some(e.to_string());
             }
         }
@@ -173,7 +187,8 @@ fn monitor(
 
 /// True once both drones' missions report Done.
 pub fn both_done(m: &[Option<MissionSetpoint>; 2]) -> bool {
-    m.iter().all(|s| s.is_some_and(|s| s.phase == MissionPhase::Done))
+    m.iter()
+        .all(|s| s.is_some_and(|s| s.phase == MissionPhase::Done))
 }
 
 /// Whether a drone's mission reports a timed-out phase.
