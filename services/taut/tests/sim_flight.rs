@@ -15,9 +15,9 @@ const TAUT: &str = env!("CARGO_BIN_EXE_taut");
 static ONE_FLIGHT_AT_A_TIME: Mutex<()> = Mutex::new(());
 
 /// Bound on Test A's swing settling time (below 2° after the payload leaves the box), s.
-/// Measured over seeds 1-3 in real time and fast mode (see the README's numbers); the bound
+/// Measured 9.4-13.4 s over seeds 1-3 in fast mode and 9.6-10.5 s for seed 1 in real time; the bound
 /// leaves room for a loaded machine.
-const TEST_A_SETTLING_BOUND_S: f64 = 12.0;
+const TEST_A_SETTLING_BOUND_S: f64 = 15.0;
 
 fn out_dir(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("taut-sim-{}-{name}", std::process::id()));
@@ -112,10 +112,13 @@ fn test_a_real_time_then_fast_agree() {
     // Comparable: same phases in the same order, and the metrics within tolerances that cover
     // what differs (scheduling delays of 0.1-5 ms, sensor read at nominal instants, the real
     // run's timing noise changing the perturbation's realisation relative to the trajectory).
-    for (i, p) in rt["phases"].as_array().unwrap().iter().enumerate() {
-        let a = p["start_s"][0].as_f64().unwrap();
-        let b = fast["phases"][i]["start_s"][0].as_f64().unwrap();
-        assert!((a - b).abs() < 2.5, "phase {i} starts at {a} s vs {b} s");
+    // Phase timing relative to the take-off (the real-time services take about a second longer
+    // to start than the in-process ones, so absolute times are offset).
+    let start = |s: &Value, i: usize| s["phases"][i]["start_s"][0].as_f64().unwrap();
+    for i in 1..rt["phases"].as_array().unwrap().len() {
+        let a = start(&rt, i) - start(&rt, 0);
+        let b = start(&fast, i) - start(&fast, 0);
+        assert!((a - b).abs() < 2.0, "phase {i} starts {a} s vs {b} s after take-off");
     }
     let close = |what: &str, a: f64, b: f64, abs: f64, rel: f64| {
         assert!(
@@ -135,6 +138,13 @@ fn test_a_real_time_then_fast_agree() {
         f(&rt, &["payload", "swing_rms_deg"]),
         f(&fast, &["payload", "swing_rms_deg"]),
         1.0,
+        0.3,
+    );
+    close(
+        "swing settling time",
+        f(&rt, &["payload", "settling_time_s"]),
+        f(&fast, &["payload", "settling_time_s"]),
+        3.0,
         0.3,
     );
     for k in 0..2 {
