@@ -15,6 +15,7 @@
 
 use super::metrics::MetricsRecorder;
 use super::summary::Summary;
+use super::trace::Trace;
 use super::{new_recorder, Outcome, SimArgs};
 use adc_sampler::mcp3423::{Reading, SampleRate};
 use controller::ControllerStage;
@@ -150,24 +151,21 @@ impl FastDrone {
     }
 
     /// A message from the emulated PX4 to the bridge.
-    fn to_bridge(&mut self, t_ns: u64, msg: &MavMessage) {
+    fn deliver_to_bridge(&mut self, t_ns: u64, msg: &MavMessage) {
         let header = MavHeader {
             system_id: u32::from(self.plant_link.system_id),
             component_id: self.plant_link.component_id,
             sequence: 0,
         };
-        match self.link.on_message(t_ns, &header, msg) {
-            Some(Telemetry::State(mut s)) => {
-                s.header.t_publish_ns = t_ns;
-                self.newest_state = Some(s);
-                self.state_pending = true;
-            }
-            Some(_) | None => {}
+        if let Some(Telemetry::State(mut s)) = self.link.on_message(t_ns, &header, msg) {
+            s.header.t_publish_ns = t_ns;
+            self.newest_state = Some(s);
+            self.state_pending = true;
         }
     }
 
     /// A message from the bridge to the emulated PX4 (what the plant's endpoint would do with it).
-    fn to_plant(&mut self, plant: &mut Plant, k: usize, t_ns: u64, msg: &MavMessage) {
+    fn deliver_to_plant(&mut self, plant: &mut Plant, k: usize, t_ns: u64, msg: &MavMessage) {
         let (sys, comp) = (self.plant_link.system_id, self.plant_link.component_id);
         match msg {
             MavMessage::SET_ATTITUDE_TARGET(d) => {
@@ -220,7 +218,7 @@ impl FastDrone {
                     target_system: self.cfg.px4.system_id,
                     target_component: self.cfg.px4.component_id,
                 });
-                self.to_bridge(t_ns, &ack);
+                self.deliver_to_bridge(t_ns, &ack);
             }
             _ => {}
         }
@@ -327,7 +325,7 @@ fn fly_companions(
                     Stream::Heartbeat => outbound::heartbeat(&tel),
                     s => outbound::stream_message(s, &tel),
                 };
-                d.to_bridge(t, &msg);
+                d.deliver_to_bridge(t, &msg);
             }
         }
         // The bridge's own traffic: heartbeats, the handshake, message intervals.
@@ -340,7 +338,7 @@ fn fly_companions(
             }
         });
         for m in out.iter().flatten() {
-            d.to_plant(plant, k, t, m);
+            d.deliver_to_plant(plant, k, t, m);
         }
     }
     // Missions at their rate, each seeing the other's newest signal.
@@ -394,63 +392,7 @@ fn fly_companions(
             tr.row(t, k, &state, &sp, &plant.truth());
         }
         if let Some(msg) = d.link.on_setpoint(t, &sp) {
-            d.to_plant(plant, k, t, &msg);
+            d.deliver_to_plant(plant, k, t, &msg);
         }
-    }
-}
-
-/// A CSV of every controller step, for looking at a flight.
-struct Trace {
-    out: std::io::BufWriter<std::fs::File>,
-}
-
-impl Trace {
-    fn create(path: &std::path::Path) -> Result<Self, String> {
-        use std::io::Write;
-        let f = std::fs::File::create(path).map_err(|e| format!("{}: {e}", path.display()))?;
-        let mut out = std::io::BufWriter::new(f);
-        writeln!(
-            out,
-            "t_s,drone,phase,flags,x,y,z,true_x,true_y,true_z,nom_x,nom_y,nom_z,sh_x,sh_y,sh_z,\
-             td_x,td_y,td_z,tf_x,tf_y,tf_z,ad_x,ad_y,ad_z,thrust_n,payload_x,payload_y,payload_z,\
-             cable_n"
-        )
-        .map_err(|e| e.to_string())?;
-        Ok(Trace { out })
-    }
-
-    fn row(
-        &mut self,
-        t: u64,
-        k: usize,
-        s: &VehicleState,
-        sp: &AttitudeSetpoint,
-        truth: &shared_types::PlantTruth,
-    ) {
-        use std::io::Write;
-        let v = |a: &[f64]| {
-            a.iter()
-                .map(|x| format!("{x:.4}"))
-                .collect::<Vec<_>>()
-                .join(",")
-        };
-        let _ = writeln!(
-            self.out,
-            "{:.3},{},{},{},{},{},{},{},{},{},{},{:.3},{},{:.3}",
-            t as f64 * 1e-9,
-            k,
-            sp.phase as u32,
-            sp.flags,
-            v(&s.position_ned_m),
-            v(&truth.drones[k].body.position_ned_m),
-            v(&sp.nominal_position_ned_m),
-            v(&sp.shifted_position_ned_m),
-            v(&sp.tension_desired_ned_n),
-            v(&sp.tension_filtered_ned_n),
-            v(&sp.acceleration_desired_ned_m_s2),
-            sp.thrust_n,
-            v(&truth.payload.position_ned_m),
-            truth.cable_tension_n[k],
-        );
     }
 }

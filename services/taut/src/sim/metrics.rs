@@ -50,8 +50,10 @@ pub struct DroneMetrics {
     /// Last Move phase, see the module doc.
     pub z_steady_state_error_m: Option<f64>,
     pub tension_rmse_n: Option<f64>,
-    /// Distance to the nominal setpoint at the end, m.
+    /// True distance to the nominal setpoint at the end, m.
     pub final_position_error_m: Option<f64>,
+    /// The same by PX4's estimate (what the phase rule sees; differs by the perturbation), m.
+    pub final_estimate_error_m: Option<f64>,
     pub failsafe_count: u32,
     pub crash_flags: u32,
     /// Controller steps without a fresh tension sample.
@@ -94,6 +96,7 @@ struct DroneAcc {
     tension_sq: f64,
     n_tension: u64,
     final_err: Option<f64>,
+    final_estimate_err: Option<f64>,
     position_only: u64,
     setpoints: u64,
     /// (time s, z error m, phase index) over the flight, for the steady-state window.
@@ -250,6 +253,8 @@ impl MetricsRecorder {
                 acc.sq_err += e.norm_squared();
                 acc.n_err += 1;
                 acc.final_err = Some(e.norm());
+                let est = Vector3::from(truth.drones[k].estimate_position_ned_m);
+                acc.final_estimate_err = Some((est - Vector3::from(m.position_ned_m)).norm());
                 acc.z_err.push((t_s, e.z, m.phase_index));
             }
         }
@@ -322,6 +327,7 @@ impl MetricsRecorder {
                     z_steady_state_error_m: z_ss,
                     tension_rmse_n: rms(a.tension_sq, a.n_tension),
                     final_position_error_m: a.final_err,
+                    final_estimate_error_m: a.final_estimate_err,
                     failsafe_count: truth.drones[k].failsafe_count,
                     crash_flags: truth.drones[k].crash_flags,
                     position_only_steps: a.position_only,

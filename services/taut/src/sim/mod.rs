@@ -9,6 +9,7 @@ pub mod metrics;
 mod realtime;
 mod setup;
 pub mod summary;
+mod trace;
 
 use clap::Args;
 use metrics::MetricsRecorder;
