@@ -67,6 +67,8 @@ struct FastDrone {
     last_signal: Option<PeerSignal>,
     controller_period_ns: u64,
     next_controller_ns: u64,
+    /// The bridge's own messages of one tick (heartbeat, handshake, message intervals).
+    outbox: Vec<MavMessage>,
 }
 
 impl FastDrone {
@@ -104,6 +106,7 @@ impl FastDrone {
             last_signal: None,
             controller_period_ns: (1e9 / cfg.controller.rate_hz).round() as u64,
             next_controller_ns: 0,
+            outbox: Vec::with_capacity(16),
             sensor,
             controller,
             mission,
@@ -329,17 +332,14 @@ fn fly_companions(
             }
         }
         // The bridge's own traffic: heartbeats, the handshake, message intervals.
-        let mut out: [Option<MavMessage>; 8] = Default::default();
-        let mut n = 0;
-        d.link.poll(t, &mut |m: &MavMessage| {
-            if n < out.len() {
-                out[n] = Some(m.clone());
-                n += 1;
-            }
-        });
-        for m in out.iter().flatten() {
-            d.deliver_to_plant(plant, k, t, m);
+        d.link
+            .poll(t, &mut |m: &MavMessage| d.outbox.push(m.clone()));
+        let mut outbox = std::mem::take(&mut d.outbox);
+        for m in outbox.drain(..) {
+            d.deliver_to_plant(plant, k, t, &m);
         }
+        // Keep the buffer's capacity for the next tick.
+        d.outbox = outbox;
     }
     // Missions at their rate, each seeing the other's newest signal.
     for k in 0..2 {
