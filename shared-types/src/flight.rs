@@ -3,6 +3,8 @@
 //! FRD (body), quaternions (w, x, y, z) rotating body FRD into NED, as PX4 uses them.
 
 use iceoryx2::prelude::ZeroCopySend;
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
 
 use crate::Header;
 
@@ -25,7 +27,9 @@ pub mod vehicle_flags {
 /// PX4's estimate of one drone, published by `px4-bridge` from ODOMETRY (and HEARTBEAT for the
 /// mode bits). The controller acts on it.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize, JsonSchema,
+)]
 pub struct VehicleState {
     /// `t_origin_ns`: when the bridge received the ODOMETRY message (CLOCK_MONOTONIC).
     pub header: Header,
@@ -46,6 +50,15 @@ pub struct VehicleState {
 }
 
 impl VehicleState {
+    /// What the controller acts on until the bridge's first state: disarmed, level, never
+    /// measured (stale).
+    pub fn before_first_odometry() -> Self {
+        Self {
+            attitude_wxyz: [1.0, 0.0, 0.0, 0.0],
+            ..Default::default()
+        }
+    }
+
     pub fn armed(&self) -> bool {
         self.flags & vehicle_flags::ARMED != 0
     }
@@ -53,7 +66,9 @@ impl VehicleState {
 
 /// One IMU reading from PX4 (HIGHRES_IMU), published by `px4-bridge`.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize, JsonSchema,
+)]
 pub struct ImuSample {
     /// `t_origin_ns`: when the bridge received it.
     pub header: Header,
@@ -67,7 +82,9 @@ pub struct ImuSample {
 
 /// Rotor speeds from PX4 (ESC_STATUS), published by `px4-bridge`.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize, JsonSchema,
+)]
 pub struct MotorSpeeds {
     /// `t_origin_ns`: when the bridge received it.
     pub header: Header,
@@ -79,7 +96,9 @@ pub struct MotorSpeeds {
 
 /// The mission's phase, as the controller and the peer see it.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend)]
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend, Serialize, Deserialize, JsonSchema,
+)]
 pub enum MissionPhase {
     /// On the ground, waiting for both drones' services and the handshake.
     #[default]
@@ -112,7 +131,9 @@ pub mod mission_flags {
 
 /// The nominal setpoint of one drone at one instant, published by `mission` at 100 Hz.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize, JsonSchema,
+)]
 pub struct MissionSetpoint {
     /// `t_origin_ns`: the mission tick's time.
     pub header: Header,
@@ -158,9 +179,22 @@ pub mod setpoint_flags {
     pub const TENSION_FLAGGED: u32 = 1 << 8;
 }
 
+/// Bits of [`AttitudeSetpoint::given_inputs`]: which inputs the step was handed (fresh or not).
+pub mod given_inputs {
+    /// A vehicle state from the bridge (without it the step saw
+    /// `VehicleState::before_first_odometry()`).
+    pub const ODOMETRY: u32 = 1 << 0;
+    /// A tension sample, whose sequence is `given_tension_sequence`.
+    pub const TENSION: u32 = 1 << 1;
+    /// A mission setpoint, whose sequence is `given_mission_sequence`.
+    pub const MISSION: u32 = 1 << 2;
+}
+
 /// What the controller hands the PX4 bridge, at 100 Hz, with what it was computed from.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize, JsonSchema,
+)]
 pub struct AttitudeSetpoint {
     /// `t_origin_ns`: that of the tension sample used (its physical measurement), or of the
     /// odometry when no tension was used.
@@ -190,4 +224,12 @@ pub struct AttitudeSetpoint {
     pub tension_filtered_ned_n: [f64; 3],
     /// Desired acceleration from the velocity PID, NED, m/s².
     pub acceleration_desired_ned_m_s2: [f64; 3],
+    /// The time the step ran at (its `now_ns`), so that a replay can run it again.
+    pub step_ns: u64,
+    /// Bits of [`given_inputs`]: the inputs handed to the step, stale ones included.
+    pub given_inputs: u32,
+    /// Sequence of the tension sample handed to the step (used or too old to use).
+    pub given_tension_sequence: u64,
+    /// Sequence of the mission setpoint handed to the step (used or too old to use).
+    pub given_mission_sequence: u64,
 }

@@ -6,6 +6,12 @@ pub const RAW_ADC: &str = "raw_adc";
 /// Topic of [`crate::TensionSample`]s from the tension stage.
 pub const TENSION: &str = "tension";
 
+/// Topic of [`crate::TensionSample`]s from the model-based external-force estimator (the
+/// baseline: accelerometer and motor speeds; `force_body_n` is its estimate of the cable pull).
+pub const TENSION_ESTIMATE: &str = "tension_estimate";
+/// Topic of [`crate::TensionSample`]s holding the plant's true anchor force (simulation only,
+/// for the `truth` tension source).
+pub const TENSION_TRUTH: &str = "tension_truth";
 /// Topic of [`crate::VehicleState`]s from the PX4 bridge.
 pub const VEHICLE_STATE: &str = "vehicle_state";
 /// Topic of [`crate::ImuSample`]s from the PX4 bridge.

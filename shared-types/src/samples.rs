@@ -1,8 +1,12 @@
 use iceoryx2::prelude::ZeroCopySend;
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
 
 /// The header every sample starts with (after PX4 uORB's `timestamp`/`timestamp_sample`).
 #[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend)]
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend, Serialize, Deserialize, JsonSchema,
+)]
 pub struct Header {
     /// Per publisher, starts at 0, +1 per sample; a gap means a lost sample.
     pub sequence: u64,
@@ -15,7 +19,9 @@ pub struct Header {
 
 /// State of one ADC channel in a [`RawAdcFrame`].
 #[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend)]
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend, Serialize, Deserialize, JsonSchema,
+)]
 pub enum ChannelStatus {
     /// A conversion finished since the previous frame; the code is new.
     #[default]
@@ -38,7 +44,9 @@ impl ChannelStatus {
 
 /// Sampling mode of the four MCP3423s, as recorded in each frame.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend)]
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend, Serialize, Deserialize, JsonSchema,
+)]
 pub enum SamplingMode {
     /// Each chip free-runs at 240 SPS; channels may be up to one period apart.
     #[default]
@@ -49,7 +57,9 @@ pub enum SamplingMode {
 
 /// One reading of the four load-cell ADCs (one MCP3423 per cell), published by `adc-sampler`.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize, JsonSchema,
+)]
 pub struct RawAdcFrame {
     /// `t_origin_ns` is the mean `conversion_ns` of the channels measured for this frame.
     pub header: Header,
@@ -104,7 +114,9 @@ pub mod tension_flags {
 /// equilibrium holds as written: T_z = -(f1+f2+f3+f4), T_x = -(d0/h)(f1-f3),
 /// T_y = -(d0/h)(f2-f4), with a cell force f_j < 0 in tension.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize, JsonSchema,
+)]
 pub struct TensionSample {
     /// `t_origin_ns` is that of the newest raw frame in the filter window.
     pub header: Header,

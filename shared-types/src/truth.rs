@@ -1,12 +1,16 @@
 //! Ground truth from the plant, for evaluation only: the companion services never read it.
 
 use iceoryx2::prelude::ZeroCopySend;
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
 
 use crate::Header;
 
 /// Pose and motion of one rigid body.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize, JsonSchema,
+)]
 pub struct BodyTruth {
     /// Centre of mass, NED, m.
     pub position_ned_m: [f64; 3],
@@ -20,7 +24,9 @@ pub struct BodyTruth {
 
 /// One drone as the plant knows it.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize, JsonSchema,
+)]
 pub struct DroneTruth {
     pub body: BodyTruth,
     /// Rotor speeds, rad/s, PX4 motor order.
@@ -55,7 +61,9 @@ pub mod crash_flags {
 
 /// What the payload touches.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend)]
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, Eq, ZeroCopySend, Serialize, Deserialize, JsonSchema,
+)]
 pub enum ContactKind {
     #[default]
     Free = 0,
@@ -65,7 +73,9 @@ pub enum ContactKind {
 
 /// The whole plant at one instant, published by `sim-plant` on `taut/plant/truth`.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, Serialize, Deserialize, JsonSchema,
+)]
 pub struct PlantTruth {
     /// `t_origin_ns` is the CLOCK_MONOTONIC instant the state belongs to.
     pub header: Header,

@@ -96,10 +96,7 @@ pub fn run(cfg: &Config) -> Result<(), String> {
     };
     let mut inputs = Inputs {
         // Until the bridge speaks: disarmed, level, never measured (stale).
-        state: VehicleState {
-            attitude_wxyz: [1.0, 0.0, 0.0, 0.0],
-            ..Default::default()
-        },
+        state: VehicleState::before_first_odometry(),
         tension: None,
         mission: None,
     };

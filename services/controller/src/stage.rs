@@ -4,7 +4,8 @@
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use rt_config::{ControllerConfig, VehicleConfig};
 use shared_types::{
-    mission_flags, setpoint_flags, AttitudeSetpoint, MissionSetpoint, TensionSample, VehicleState,
+    given_inputs, mission_flags, setpoint_flags, AttitudeSetpoint, MissionSetpoint, TensionSample,
+    VehicleState,
 };
 
 use crate::formation::{static_tension, FormationRegime};
@@ -164,6 +165,19 @@ impl ControllerStage {
     ) -> AttitudeSetpoint {
         let c = &self.cfg;
         let age_s = |t_origin_ns: u64| now_ns.saturating_sub(t_origin_ns) as f64 * 1e-9;
+        // What a replay needs to hand the same inputs to the step again.
+        let mut given = given_inputs::ODOMETRY;
+        let given_tension_sequence = tension.map_or(0, |t| {
+            given |= given_inputs::TENSION;
+            t.header.sequence
+        });
+        let given_mission_sequence = mission.map_or(0, |m| {
+            given |= given_inputs::MISSION;
+            m.header.sequence
+        });
+        if *state == VehicleState::before_first_odometry() {
+            given &= !given_inputs::ODOMETRY;
+        }
         let mission = mission.filter(|m| age_s(m.header.t_origin_ns) <= c.mission_max_age_s);
         let tension = tension.filter(|t| age_s(t.header.t_origin_ns) <= c.tension_max_age_s);
         let odometry_stale = age_s(state.header.t_origin_ns) > c.odometry_max_age_s;
@@ -171,6 +185,10 @@ impl ControllerStage {
         let mut out = AttitudeSetpoint {
             odometry_origin_ns: state.header.t_origin_ns,
             odometry_sequence: state.header.sequence,
+            step_ns: now_ns,
+            given_inputs: given,
+            given_tension_sequence,
+            given_mission_sequence,
             ..Default::default()
         };
         out.header.t_origin_ns = state.header.t_origin_ns;

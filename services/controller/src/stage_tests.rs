@@ -334,6 +334,21 @@ fn fields_carry_the_inputs() {
         ),
         (5, 7, 11)
     );
+    // What a replay needs: the step's time and which inputs it was handed.
+    assert_eq!(
+        (
+            sp.step_ns,
+            sp.given_inputs,
+            sp.given_tension_sequence,
+            sp.given_mission_sequence
+        ),
+        (
+            2 * DT_NS,
+            given_inputs::ODOMETRY | given_inputs::TENSION | given_inputs::MISSION,
+            5,
+            11
+        )
+    );
     assert_eq!(
         (sp.header.t_origin_ns, sp.odometry_origin_ns),
         (DT_NS, DT_NS + 1)
