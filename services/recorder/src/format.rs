@@ -100,10 +100,12 @@ mod tests {
 
     #[test]
     fn floats_round_trip_bit_for_bit() {
-        let mut s = AttitudeSetpoint::default();
-        s.attitude_wxyz = [0.1 + 0.2, 1.0 / 3.0, -1e-300, 6.02214076e23];
-        s.thrust_n = f64::from_bits(0x400921FB54442D19);
-        s.step_ns = u64::MAX - 1;
+        let s = AttitudeSetpoint {
+            attitude_wxyz: [0.1 + 0.2, 1.0 / 3.0, -1e-300, 6.02214076e23],
+            thrust_n: f64::from_bits(0x400921FB54442D19),
+            step_ns: u64::MAX - 1,
+            ..Default::default()
+        };
         let json = serde_json::to_vec(&s).expect("encode");
         let back: AttitudeSetpoint = serde_json::from_slice(&json).expect("decode");
         assert_eq!(back, s);
