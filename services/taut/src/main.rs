@@ -5,6 +5,7 @@
 mod bench;
 mod calibrate_cmd;
 mod plant_cmd;
+mod replay;
 mod sensor;
 mod sim;
 mod supervisor;
@@ -50,6 +51,8 @@ enum Command {
     Bench(bench::BenchArgs),
     /// Run one service (started by `launch`; not usually typed by hand).
     Svc(svc::SvcArgs),
+    /// Run the controller library again on a recording's inputs; check its setpoints bit for bit.
+    Replay(replay::ReplayArgs),
 }
 
 #[derive(Subcommand)]
@@ -82,6 +85,7 @@ fn main() -> ExitCode {
         Command::Plant(args) => plant_cmd::run(&args),
         Command::Bench(args) => bench::run(&args),
         Command::Svc(args) => svc::run(&args),
+        Command::Replay(args) => replay::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
