@@ -125,8 +125,7 @@ pub fn replay_drone(rec: &Recording, uav: &str) -> Result<ReplayOutcome, ReplayE
         steps: 0,
         first_mismatch: None,
     };
-    let mut expected_sequence = 0;
-    for recorded in &setpoints {
+    for (expected_sequence, recorded) in (0u64..).zip(&setpoints) {
         outcome.steps += 1;
         let mismatch = |what: String| Mismatch {
             sequence: recorded.header.sequence,
@@ -141,7 +140,6 @@ pub fn replay_drone(rec: &Recording, uav: &str) -> Result<ReplayOutcome, ReplayE
             )));
             break;
         }
-        expected_sequence += 1;
         match step_again(&mut stage, recorded, &states, &tensions, &missions) {
             Ok(replayed) => {
                 if let Some(what) = first_difference(recorded, &replayed) {
@@ -239,9 +237,8 @@ fn diff_value(a: &Value, b: &Value, path: String) -> Option<String> {
             .enumerate()
             .find_map(|(i, (va, vb))| diff_value(va, vb, format!("{path}[{i}]"))),
         // Leaves compare by their JSON text: for floats that is their exact bits.
-        _ => {
-            (a.to_string() != b.to_string()).then(|| format!("{path}: recorded {a}, replayed {b}"))
-        }
+        _ => (serde_json::to_string(a).ok() != serde_json::to_string(b).ok())
+            .then(|| format!("{path}: recorded {a}, replayed {b}")),
     }
 }
 
