@@ -163,7 +163,7 @@ fn draw_panel(
         .build_cartesian_2d(0f64..x_hi, y_lo..y_hi)
         .map_err(msg)?;
     let mut mesh = chart.configure_mesh();
-    mesh.light_line_style(BLACK.mix(0.05));
+    mesh.light_line_style(WHITE.mix(0.0));
     if text {
         mesh.x_desc("time since the first sample, s")
             .y_desc(panel.y_label.as_str())
@@ -189,7 +189,7 @@ fn draw_panel(
             chart
                 .draw_series(std::iter::once(Text::new(
                     format!("{:?}", p.phase),
-                    (a, y_hi),
+                    (a + x_hi * 0.004, y_hi),
                     ("sans-serif", 14)
                         .into_font()
                         .color(&phase_color(p.phase).mix(0.9)),
@@ -199,11 +199,10 @@ fn draw_panel(
     }
     for s in &panel.series {
         let c = color(s.source);
-        let width = if s.source == Source::Truth { 1 } else { 2 };
         let drawn = chart
             .draw_series(LineSeries::new(
                 decimate(&s.points, MAX_BUCKETS),
-                ShapeStyle::from(&c).stroke_width(width),
+                ShapeStyle::from(&c).stroke_width(2),
             ))
             .map_err(msg)?;
         if text {

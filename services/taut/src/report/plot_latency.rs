@@ -78,7 +78,7 @@ fn draw_span(area: &Area<'_>, span: &SpanLatency, text: bool) -> Result<(), Stri
         .build_cartesian_2d((1f64..x_hi).log_scale(), 0f64..y_hi)
         .map_err(msg)?;
     let mut mesh = chart.configure_mesh();
-    mesh.light_line_style(BLACK.mix(0.05));
+    mesh.light_line_style(WHITE.mix(0.0));
     if text {
         mesh.x_label_formatter(&|x| percentile_label(*x))
             .x_desc("percentile (log scale of 1/(1 − p))")
