@@ -1,4 +1,4 @@
-//! `taut`: the one binary. Verbs for people (`sim`, `launch`, `sensor`, `calibrate`, `plant`,
+//! `taut`: the one binary. Verbs for people (`sim`, `report`, `launch`, `sensor`, `calibrate`, `plant`,
 //! `bench`, `config check`) and `svc NAME`, the entry of each service process that `launch` starts as
 //! a child of this same executable.
 
@@ -6,6 +6,7 @@ mod bench;
 mod calibrate_cmd;
 mod plant_cmd;
 mod replay;
+mod report;
 mod sensor;
 mod sim;
 mod supervisor;
@@ -45,6 +46,8 @@ enum Command {
     Calibrate(calibrate_cmd::CalibrateArgs),
     /// Fly a scenario plant-in-the-loop: the plant and both drones' services (the main job).
     Sim(sim::SimArgs),
+    /// Figures, latency percentiles and flight metrics of a recording (MCAP), as report.md.
+    Report(report::ReportArgs),
     /// The plant alone: two simulated drones with emulated PX4 (MAVLink) and force sensors.
     Plant(plant_cmd::PlantArgs),
     /// Benchmarks of the running service set.
@@ -83,6 +86,7 @@ fn main() -> ExitCode {
         Command::Calibrate(args) => calibrate_cmd::run(&args),
         Command::Sim(args) => sim::run(&args),
         Command::Plant(args) => plant_cmd::run(&args),
+        Command::Report(args) => report::run(&args),
         Command::Bench(args) => bench::run(&args),
         Command::Svc(args) => svc::run(&args),
         Command::Replay(args) => replay::run(&args),

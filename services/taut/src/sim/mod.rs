@@ -83,9 +83,23 @@ pub fn run(args: &SimArgs) -> Result<(), String> {
     summary.write(&out)?;
     print!("{summary}");
     println!("[sim] wrote {}", out.join("summary.json").display());
+    write_report_if_recorded(&out);
     match &summary.failure {
         None => Ok(()),
         Some(why) => Err(format!("the flight failed: {why}")),
+    }
+}
+
+/// The report of `<out>/recording.mcap` into `<out>/report/`, if recorded; a failure is
+/// printed, it does not change the flight's verdict.
+fn write_report_if_recorded(out: &std::path::Path) {
+    let recording = out.join("recording.mcap");
+    if !recording.exists() {
+        return;
+    }
+    match crate::report::write_report(&recording, &out.join("report")) {
+        Ok(r) => println!("[sim] wrote {}", r.markdown.display()),
+        Err(e) => eprintln!("[sim] no report: {e}"),
     }
 }
 
