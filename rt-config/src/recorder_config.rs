@@ -68,7 +68,8 @@ mod tests {
 
     #[test]
     fn defaults_and_overrides() {
-        assert!(Config::embedded_sim().recorder.enabled);
+        assert!(!Config::embedded_sim().recorder.enabled);
+        assert!(super::RecorderConfig::default().enabled);
         let text =
             crate::EMBEDDED_SIM_CONFIG.replacen("chunk_period_s = 1.0", "chunk_period_s = 0.5", 1);
         let c = Config::from_toml_str(&text, "test.toml").unwrap();
@@ -79,7 +80,7 @@ mod tests {
 
     #[test]
     fn bad_values_name_their_key() {
-        for (line, key) in [("enabled = true", "enabled"), ("dri = \"x\"", "dri")] {
+        for (line, key) in [("enabled = false", "enabled"), ("dri = \"x\"", "dri")] {
             let err = with_recorder(line).unwrap_err();
             assert!(err.contains(key), "{line}: {err}");
         }

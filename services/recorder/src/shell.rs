@@ -216,6 +216,11 @@ fn report(stats: &[ChannelStats], out: &Path) {
 /// `taut svc recorder --config FILE`: one drone's topics into
 /// `<recorder.dir>/<uav>-<UTC time>.mcap`, its effective config attached.
 pub fn run(cfg: &Config) -> Result<(), String> {
+    run_with_ready(cfg, None)
+}
+
+/// [`run`], creating `ready` once subscribed to every topic.
+pub fn run_with_ready(cfg: &Config, ready: Option<&Path>) -> Result<(), String> {
     let dir = Path::new(&cfg.recorder.dir);
     std::fs::create_dir_all(dir).map_err(|e| format!("recorder.dir = {dir:?}: {e}"))?;
     let opts = RecordOptions {
@@ -226,7 +231,7 @@ pub fn run(cfg: &Config) -> Result<(), String> {
         configs: vec![(cfg.uav.clone(), cfg.to_toml())],
         chunk_period_ns: (cfg.recorder.chunk_period_s * 1e9) as u64,
         buffer: cfg.recorder.buffer,
-        ready_file: None,
+        ready_file: ready.map(Path::to_path_buf),
         node_name: format!("{}-recorder", cfg.uav),
     };
     record(&opts).map(drop)

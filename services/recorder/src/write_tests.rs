@@ -41,7 +41,9 @@ fn awkward<T: Recordable + Default>(seed: u64) -> T {
             Value::Number(n) => {
                 *k += 1;
                 *v = if n.is_f64() {
-                    Value::from((*k as f64 + 0.1) / 3.0 * if *k % 2 == 0 { -1.0 } else { 1.0 })
+                    Value::from(
+                        (*k as f64 + 0.1) / 3.0 * if k.is_multiple_of(2) { -1.0 } else { 1.0 },
+                    )
                 } else {
                     // Fits every integer field (the ADC codes are i16).
                     Value::from(*k % 30_000 + 7)

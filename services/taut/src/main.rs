@@ -1,10 +1,11 @@
 //! `taut`: the one binary. Verbs for people (`sim`, `launch`, `sensor`, `calibrate`, `plant`,
-//! `bench`, `config check`) and `svc NAME`, the entry of each service process that `launch` starts as
+//! `record`, `bench`, `config check`) and `svc NAME`, the entry of each service process that `launch` starts as
 //! a child of this same executable.
 
 mod bench;
 mod calibrate_cmd;
 mod plant_cmd;
+mod record_cmd;
 mod sensor;
 mod sim;
 mod supervisor;
@@ -46,6 +47,8 @@ enum Command {
     Sim(sim::SimArgs),
     /// The plant alone: two simulated drones with emulated PX4 (MAVLink) and force sensors.
     Plant(plant_cmd::PlantArgs),
+    /// Record drones' topics (and the plant's truth) into one MCAP file until Ctrl-C.
+    Record(record_cmd::RecordArgs),
     /// Benchmarks of the running service set.
     Bench(bench::BenchArgs),
     /// Run one service (started by `launch`; not usually typed by hand).
@@ -80,6 +83,7 @@ fn main() -> ExitCode {
         Command::Calibrate(args) => calibrate_cmd::run(&args),
         Command::Sim(args) => sim::run(&args),
         Command::Plant(args) => plant_cmd::run(&args),
+        Command::Record(args) => record_cmd::run(&args),
         Command::Bench(args) => bench::run(&args),
         Command::Svc(args) => svc::run(&args),
     };
