@@ -73,10 +73,12 @@ fn sigkill_loses_at_most_the_last_chunk() {
     let mut next = start;
     // 2.7 s: five closed chunks, the kill lands inside the sixth.
     while start.elapsed() < Duration::from_millis(2700) {
-        let mut s = TensionSample::default();
-        s.force_body_n = [0.0, 0.0, tension.published() as f64];
+        let s = TensionSample {
+            force_body_n: [0.0, 0.0, tension.published() as f64],
+            ..Default::default()
+        };
         tension.publish(s).unwrap();
-        if tension.published() % 20 == 0 {
+        if tension.published().is_multiple_of(20) {
             mission.publish(MissionSetpoint::default()).unwrap();
         }
         next += period;

@@ -114,8 +114,9 @@ fn check_recording(out: &Path) {
     assert_eq!(result["drops"], 0, "{result}");
     // Per drone at least: raw ADC, tension, vehicle state, IMU, motor speeds, mission and
     // attitude setpoints; plus the truth.
+    const AT_LEAST: u64 = 2 * 7 + 1;
     let channels = result["channels"].as_u64().unwrap();
-    assert!(channels >= 2 * 7 + 1, "{channels} channels: {result}");
+    assert!(channels >= AT_LEAST, "{channels} channels: {result}");
     let rec = recorder::Recording::open(&out.join("recording.mcap")).unwrap();
     assert!(!rec.truncated);
     let mut uavs = rec.uavs();
