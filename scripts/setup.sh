@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # One-time setup of a fresh Debian machine for building and testing taut.
 # Installs what the Rust toolchain does not bring: a TTF font for the calibration plots, and the
-# Python packages the tests use as real peers (pymavlink for MAVLink).
+# Python packages the tests use as real peers (pymavlink for MAVLink, mcap to read recordings).
 set -euo pipefail
 need=()
 [ -f /usr/share/fonts/truetype/dejavu/DejaVuSans.ttf ] || need+=(fonts-dejavu-core)
@@ -12,8 +12,8 @@ if [ ${#need[@]} -gt 0 ]; then
     DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq "${need[@]}"
 fi
 # Real peers for the tests, pinned so a fresh machine gets what the tests were written against.
-PY_PKGS=(pymavlink==2.4.50)
-if ! python3 -c "import pymavlink" 2>/dev/null; then
+PY_PKGS=(pymavlink==2.4.50 mcap==1.6.0)
+if ! python3 -c "import pymavlink, mcap.reader" 2>/dev/null; then
     python3 -m pip install --quiet --disable-pip-version-check --root-user-action=ignore "${PY_PKGS[@]}"
 fi
 echo "setup: ok"

@@ -1,6 +1,6 @@
 use serde::{Deserialize, Serialize};
 
-use crate::{ControllerConfig, MissionConfig, Px4Config, VehicleConfig};
+use crate::{ControllerConfig, MissionConfig, Px4Config, RecorderConfig, VehicleConfig};
 use std::path::Path;
 
 use crate::validate::{self, ConfigError};
@@ -31,6 +31,8 @@ pub struct Config {
     pub px4: Px4Config,
     #[serde(default)]
     pub mission: MissionConfig,
+    #[serde(default)]
+    pub recorder: RecorderConfig,
     #[serde(default)]
     pub services: ServicesConfig,
     #[serde(default)]

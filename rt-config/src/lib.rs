@@ -7,6 +7,7 @@ mod controller_config;
 mod mission_config;
 pub mod periodic;
 mod px4_config;
+mod recorder_config;
 pub mod rt;
 mod validate;
 
@@ -14,4 +15,5 @@ pub use config::*;
 pub use controller_config::*;
 pub use mission_config::*;
 pub use px4_config::*;
+pub use recorder_config::*;
 pub use validate::ConfigError;

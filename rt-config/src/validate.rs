@@ -93,6 +93,7 @@ pub(crate) fn validate(cfg: &Config) -> Result<(), String> {
     cfg.controller.validate()?;
     cfg.mission.validate()?;
     cfg.px4.validate()?;
+    cfg.recorder.validate()?;
     service("services.adc_sampler", &cfg.services.adc_sampler)?;
     service("services.tension", &cfg.services.tension)?;
     service("services.controller", &cfg.services.controller)?;

@@ -7,4 +7,7 @@ mod stop;
 mod topic;
 
 pub use stop::{install_stop_handler, request_stop, stop_requested};
-pub use topic::{Ipc, IpcError, Stamped, TopicPublisher, TopicSubscriber};
+pub use topic::{
+    Ipc, IpcError, Stamped, TopicPublisher, TopicSubscriber, SUBSCRIBER_BUFFER,
+    SUBSCRIBER_MAX_BUFFER,
+};

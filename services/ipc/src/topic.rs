@@ -60,7 +60,11 @@ pub enum IpcError {
 const MAX_SUBSCRIBERS: usize = 8;
 const MAX_PUBLISHERS: usize = 2;
 const MAX_NODES: usize = 16;
-const SUBSCRIBER_BUFFER: usize = 16;
+/// A consumer's buffer, samples.
+pub const SUBSCRIBER_BUFFER: usize = 16;
+/// The deepest buffer a subscriber may ask for (the recorder's: ~0.3 s of a 900 Hz IMU, so a
+/// recorder that is descheduled on a loaded machine still loses nothing).
+pub const SUBSCRIBER_MAX_BUFFER: usize = 256;
 
 /// A topic's name, its publish-subscribe service and its event service.
 type TopicServices<T> = (
@@ -127,7 +131,7 @@ impl Ipc {
             .max_publishers(MAX_PUBLISHERS)
             .max_subscribers(MAX_SUBSCRIBERS)
             .max_nodes(MAX_NODES)
-            .subscriber_max_buffer_size(SUBSCRIBER_BUFFER)
+            .subscriber_max_buffer_size(SUBSCRIBER_MAX_BUFFER)
             .history_size(0)
             .enable_safe_overflow(true)
             .open_or_create()
@@ -164,18 +168,36 @@ impl Ipc {
             publisher,
             notifier,
             sequence: 0,
+            send_failures: 0,
         })
     }
 
-    /// A subscriber of `T` on this drone's `topic`.
+    /// A subscriber of `T` on this drone's `topic` with a buffer of [`SUBSCRIBER_BUFFER`].
     pub fn subscriber<T: Stamped>(&self, topic: &str) -> Result<TopicSubscriber<T>, IpcError> {
+        self.subscriber_with_buffer(topic, SUBSCRIBER_BUFFER)
+    }
+
+    /// A subscriber of `T` on this drone's `topic` holding up to `buffer` samples (at most
+    /// [`SUBSCRIBER_MAX_BUFFER`]) before the oldest are overwritten.
+    pub fn subscriber_with_buffer<T: Stamped>(
+        &self,
+        topic: &str,
+        buffer: usize,
+    ) -> Result<TopicSubscriber<T>, IpcError> {
         let (name, ps, ev) = self.open::<T>(topic)?;
+        if buffer == 0 || buffer > SUBSCRIBER_MAX_BUFFER {
+            return Err(IpcError::Port {
+                name,
+                message: format!("buffer {buffer}: must be 1..={SUBSCRIBER_MAX_BUFFER}"),
+            });
+        }
         let port_err = |e: String| IpcError::Port {
             name: name.clone(),
             message: e,
         };
         let subscriber = ps
             .subscriber_builder()
+            .buffer_size(buffer)
             .create()
             .map_err(|e| port_err(format!("{e:?}")))?;
         let listener = ev
@@ -190,12 +212,21 @@ impl Ipc {
     }
 }
 
-/// Publishes samples of one topic and wakes its subscribers.
+/// Publishes samples of one topic and wakes its subscribers. When dropped it logs
+/// `[ipc] published N on <service name>` (N = sequence numbers given out, sent or not) so a
+/// test can compare a recording against what went out.
 pub struct TopicPublisher<T: Stamped> {
     name: String,
     publisher: iceoryx2::port::publisher::Publisher<ipc::Service, T, ()>,
     notifier: iceoryx2::port::notifier::Notifier<ipc::Service>,
     sequence: u64,
+    send_failures: u64,
+}
+
+impl<T: Stamped> Drop for TopicPublisher<T> {
+    fn drop(&mut self) {
+        eprintln!("{}", self.published_line());
+    }
 }
 
 impl<T: Stamped> TopicPublisher<T> {
@@ -207,26 +238,47 @@ impl<T: Stamped> TopicPublisher<T> {
         h.t_publish_ns = rt_config::periodic::now_ns();
         let header = *h;
         self.sequence += 1;
-        let send_err = |message: String| IpcError::Send {
-            name: self.name.clone(),
-            message,
-        };
-        let loaned = self
+        let sent = self
             .publisher
             .loan_uninit()
-            .map_err(|e| send_err(format!("{e:?}")))?;
-        loaned
-            .write_payload(sample)
-            .send()
-            .map_err(|e| send_err(format!("{e:?}")))?;
-        self.notifier
-            .notify()
-            .map_err(|e| send_err(format!("notify: {e:?}")))?;
+            .map_err(|e| format!("{e:?}"))
+            .and_then(|l| l.write_payload(sample).send().map_err(|e| format!("{e:?}")));
+        if let Err(message) = sent {
+            self.send_failures += 1;
+            return Err(IpcError::Send {
+                name: self.name.clone(),
+                message,
+            });
+        }
+        self.notifier.notify().map_err(|e| IpcError::Send {
+            name: self.name.clone(),
+            message: format!("notify: {e:?}"),
+        })?;
         Ok(header)
     }
 
     pub fn name(&self) -> &str {
         &self.name
+    }
+
+    /// Samples given a sequence number so far (the next sample's sequence).
+    pub fn published(&self) -> u64 {
+        self.sequence
+    }
+
+    /// Samples that could not be sent (they still used a sequence number: a subscriber sees a
+    /// gap).
+    pub fn send_failures(&self) -> u64 {
+        self.send_failures
+    }
+
+    /// `[ipc] published N on NAME` (and the send failures, if any), as logged on drop.
+    pub fn published_line(&self) -> String {
+        let failed = match self.send_failures {
+            0 => String::new(),
+            n => format!(" ({n} not sent)"),
+        };
+        format!("[ipc] published {} on {}{failed}", self.sequence, self.name)
     }
 }
 
@@ -320,6 +372,45 @@ mod tests {
             sub.wait_and_drain(Duration::from_millis(10), |_| {})
                 .unwrap(),
             0
+        );
+    }
+
+    #[test]
+    fn a_deep_buffer_keeps_what_a_shallow_one_loses_even_after_the_publisher_left() {
+        let root = format!("unit-deep-{}", std::process::id());
+        let ipc = Ipc::new("ipc-test-deep", &root, "uavT").unwrap();
+        let deep = ipc
+            .subscriber_with_buffer::<TensionSample>("tension", SUBSCRIBER_MAX_BUFFER)
+            .unwrap();
+        let shallow = ipc.subscriber::<TensionSample>("tension").unwrap();
+        assert!(ipc
+            .subscriber_with_buffer::<TensionSample>("tension", SUBSCRIBER_MAX_BUFFER + 1)
+            .is_err());
+        let mut publ = ipc.publisher::<TensionSample>("tension").unwrap();
+        // Both subscribers connect to the new publisher (the recorder's loop does this on
+        // every poll; here once, before the burst).
+        assert_eq!(deep.drain(&mut |_| {}).unwrap(), 0);
+        assert_eq!(shallow.drain(&mut |_| {}).unwrap(), 0);
+        for _ in 0..200 {
+            publ.publish(TensionSample::default()).unwrap();
+        }
+        assert_eq!(publ.published(), 200);
+        assert_eq!(
+            publ.published_line(),
+            format!("[ipc] published 200 on {}", publ.name())
+        );
+        // iceoryx2 keeps a departed publisher's undelivered samples for its subscribers.
+        drop(publ);
+        let mut seqs = Vec::new();
+        deep.drain(&mut |s| seqs.push(s.header.sequence)).unwrap();
+        assert_eq!(seqs, (0..200).collect::<Vec<_>>());
+        let mut newest = Vec::new();
+        shallow
+            .drain(&mut |s| newest.push(s.header.sequence))
+            .unwrap();
+        assert_eq!(
+            newest,
+            (200 - SUBSCRIBER_BUFFER as u64..200).collect::<Vec<_>>()
         );
     }
 }

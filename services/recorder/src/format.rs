@@ -10,9 +10,15 @@
 //! - `log_time` is when the recorder took the sample (CLOCK_MONOTONIC ns; simulated ns in fast
 //!   mode), `publish_time` the sample's `header.t_publish_ns`, `sequence` its
 //!   `header.sequence` (low 32 bits).
-//! - Metadata record [`META_RECORDING`] at the start (clock, mode, drones), and at a clean close
-//!   [`META_DROPS`] and [`META_RECEIVED`]: per channel topic, the samples lost (sequence gaps) and
-//!   taken. Attachments `config/<uav>.toml` hold each drone's effective configuration.
+//! - Metadata record [`META_RECORDING`] at the start (clock, mode, drones, chunk period), and at
+//!   a clean close [`META_DROPS`] and [`META_RECEIVED`]: per channel topic, the samples lost
+//!   (sequence gaps) and taken; also [`META_MISSED_BEFORE_START`] (the first sequence taken:
+//!   published before the recorder subscribed, not a drop), [`META_RESTARTS`] (the sequence went
+//!   backwards), [`META_FIRST_SEQUENCE`] and [`META_LAST_SEQUENCE`]. Attachments
+//!   `config/<uav>.toml` (media type `application/toml`) hold each drone's effective
+//!   configuration, written at the start so a killed recording still has them.
+//! - Chunks are closed (and flushed to the OS) at least every chunk period of log time (1 s by
+//!   default), so a recorder killed with SIGKILL loses at most its open chunk.
 
 use schemars::JsonSchema;
 use serde::{de::DeserializeOwned, Serialize};
@@ -32,6 +38,17 @@ pub const META_RECORDING: &str = "taut.recording";
 pub const META_DROPS: &str = "taut.drops";
 /// Metadata written at a clean close: channel topic -> samples written.
 pub const META_RECEIVED: &str = "taut.received";
+/// Metadata written at a clean close: channel topic -> the first sequence taken (samples
+/// published before the recorder subscribed).
+pub const META_MISSED_BEFORE_START: &str = "taut.missed_before_start";
+/// Metadata written at a clean close: channel topic -> times the publisher restarted.
+pub const META_RESTARTS: &str = "taut.restarts";
+/// Metadata written at a clean close: channel topic -> first sequence taken ("" if none).
+pub const META_FIRST_SEQUENCE: &str = "taut.first_sequence";
+/// Metadata written at a clean close: channel topic -> last sequence taken ("" if none).
+pub const META_LAST_SEQUENCE: &str = "taut.last_sequence";
+/// Media type of the config attachments.
+pub const CONFIG_MEDIA_TYPE: &str = "application/toml";
 /// Attachment name of a drone's effective configuration (TOML).
 pub fn config_attachment(uav: &str) -> String {
     format!("config/{uav}.toml")

@@ -1,10 +1,12 @@
-//! `taut`: the one binary. Verbs for people (`sim`, `report`, `launch`, `sensor`, `calibrate`, `plant`,
-//! `bench`, `config check`) and `svc NAME`, the entry of each service process that `launch` starts as
+//! `taut`: the one binary. Verbs for people (`sim`, `study`, `report`, `replay`, `launch`,
+//! `sensor`, `calibrate`, `plant`, `record`, `bench`, `config check`) and `svc NAME`, the entry
+//! of each service process that `launch` starts as
 //! a child of this same executable.
 
 mod bench;
 mod calibrate_cmd;
 mod plant_cmd;
+mod record_cmd;
 mod replay;
 mod report;
 mod sensor;
@@ -50,6 +52,8 @@ enum Command {
     Report(report::ReportArgs),
     /// The plant alone: two simulated drones with emulated PX4 (MAVLink) and force sensors.
     Plant(plant_cmd::PlantArgs),
+    /// Record drones' topics (and the plant's truth) into one MCAP file until Ctrl-C.
+    Record(record_cmd::RecordArgs),
     /// Benchmarks of the running service set.
     Bench(bench::BenchArgs),
     /// Run one service (started by `launch`; not usually typed by hand).
@@ -87,6 +91,7 @@ fn main() -> ExitCode {
         Command::Sim(args) => sim::run(&args),
         Command::Plant(args) => plant_cmd::run(&args),
         Command::Report(args) => report::run(&args),
+        Command::Record(args) => record_cmd::run(&args),
         Command::Bench(args) => bench::run(&args),
         Command::Svc(args) => svc::run(&args),
         Command::Replay(args) => replay::run(&args),

@@ -56,6 +56,9 @@ pub struct Supervisor {
     pub deaths: Vec<String>,
     /// When set, each child's stdout and stderr go to `<dir>/<name>.log` (appended).
     log_dir: Option<PathBuf>,
+    /// Services stopped only after every other one has exited (the recorder: it drains what
+    /// the others published last).
+    stop_last: Vec<String>,
 }
 
 impl Supervisor {
@@ -68,6 +71,7 @@ impl Supervisor {
             services: Vec::new(),
             deaths: Vec::new(),
             log_dir: None,
+            stop_last: Vec::new(),
         })
     }
 
@@ -164,16 +168,37 @@ impl Supervisor {
         Verdict::Running
     }
 
+    /// Makes [`Self::stop_all`] stop the service `name` after all the others have exited.
+    pub fn stop_last(&mut self, name: &str) {
+        self.stop_last.push(name.to_string());
+    }
+
     /// SIGTERM to every child, then SIGKILL to those still alive after `grace`; reaps all.
+    /// Those named in [`Self::stop_last`] go in a second round, once the first has exited.
     pub fn stop_all(&mut self, grace: Duration) {
+        let last = std::mem::take(&mut self.stop_last);
+        self.stop_round(grace, |name| !last.iter().any(|l| l == name));
+        self.stop_round(grace, |_| true);
+        self.stop_last = last;
+        // Whatever a killed child left in shared memory goes now, not at the next start.
+        let node = format!("supervisor-{}", std::process::id());
+        if let Err(e) = taut_ipc::Ipc::cleanup_dead_nodes(&node) {
+            eprintln!("[launch] iceoryx2 cleanup: {e}");
+        }
+    }
+
+    fn stop_round(&mut self, grace: Duration, pick: impl Fn(&str) -> bool) {
         for s in &self.services {
-            if let Some(c) = &s.child {
+            if let Some(c) = s.child.as_ref().filter(|_| pick(&s.spec.name)) {
                 // SAFETY: kill on our own child's pid.
                 unsafe { libc::kill(c.id() as i32, libc::SIGTERM) };
             }
         }
         let deadline = Instant::now() + grace;
         for s in &mut self.services {
+            if !pick(&s.spec.name) {
+                continue;
+            }
             if let Some(mut c) = s.child.take() {
                 loop {
                     match c.try_wait() {
@@ -188,11 +213,6 @@ impl Supervisor {
                     }
                 }
             }
-        }
-        // Whatever a killed child left in shared memory goes now, not at the next start.
-        let node = format!("supervisor-{}", std::process::id());
-        if let Err(e) = taut_ipc::Ipc::cleanup_dead_nodes(&node) {
-            eprintln!("[launch] iceoryx2 cleanup: {e}");
         }
     }
 }
@@ -224,18 +244,51 @@ fn services(config_path: &Path, names: &[&str]) -> Vec<ServiceSpec> {
         .collect()
 }
 
+/// Waits up to `timeout` for `path` to exist.
+pub fn wait_for_file(path: &Path, timeout: Duration) -> bool {
+    let end = Instant::now() + timeout;
+    while !path.exists() {
+        if Instant::now() >= end || stop_requested() {
+            return false;
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    true
+}
+
 /// `taut launch --config FILE`.
 pub fn launch(config_path: &Path) -> Result<(), String> {
     let cfg = Config::load(config_path).map_err(|e| e.to_string())?;
     install_stop_handler();
     let mut sup = Supervisor::new(cfg.supervisor)?;
+    // The recorder first (it takes every sample from the first) and stopped last.
+    let recorder = cfg.recorder.enabled.then_some("recorder");
+    if let Some(name) = recorder {
+        let ready = std::env::temp_dir().join(format!("taut-launch-{}.ready", std::process::id()));
+        let _ = std::fs::remove_file(&ready);
+        sup.start(ServiceSpec::svc(
+            name,
+            vec![
+                "--config".into(),
+                config_path.display().to_string(),
+                "--ready".into(),
+                ready.display().to_string(),
+            ],
+        ))?;
+        sup.stop_last(name);
+        if !wait_for_file(&ready, Duration::from_secs(10)) {
+            eprintln!("[launch] the recorder is not subscribed after 10 s; starting anyway");
+        }
+        let _ = std::fs::remove_file(&ready);
+    }
     for spec in drone_services(config_path) {
         sup.start(spec)?;
     }
     eprintln!(
-        "[launch] {}: {} running (Ctrl-C to stop)",
+        "[launch] {}: {}{} running (Ctrl-C to stop)",
         cfg.uav,
-        FLIGHT_SERVICES.join(", ")
+        FLIGHT_SERVICES.join(", "),
+        if recorder.is_some() { ", recorder" } else { "" }
     );
     let verdict = loop {
         if stop_requested() {

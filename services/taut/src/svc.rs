@@ -28,6 +28,8 @@ pub enum ServiceName {
     Mission,
     /// MAVLink link to PX4: AttitudeSetpoint -> SET_ATTITUDE_TARGET, telemetry -> VehicleState.
     Px4Bridge,
+    /// Every topic of the drone -> an MCAP file in `recorder.dir` (not real-time).
+    Recorder,
 }
 
 impl ServiceName {
@@ -39,6 +41,7 @@ impl ServiceName {
             ServiceName::Controller => "controller",
             ServiceName::Mission => "mission",
             ServiceName::Px4Bridge => "px4-bridge",
+            ServiceName::Recorder => "recorder",
         }
     }
 }
@@ -49,6 +52,9 @@ pub struct SvcArgs {
     /// Drone config (adc-sampler, tension).
     #[arg(long)]
     pub config: Option<PathBuf>,
+    /// (recorder) Create this file once subscribed to every topic.
+    #[arg(long)]
+    pub ready: Option<PathBuf>,
     #[command(flatten)]
     pub sim: SimSensorArgs,
 }
@@ -92,6 +98,10 @@ pub fn run(args: &SvcArgs) -> Result<(), String> {
         ServiceName::Px4Bridge => {
             px4_bridge::shell::run(&crate::load_config(args.config.as_deref())?)
         }
+        ServiceName::Recorder => recorder::shell::run_with_ready(
+            &crate::load_config(args.config.as_deref())?,
+            args.ready.as_deref(),
+        ),
         name => {
             let cfg = crate::load_config(args.config.as_deref())?;
             let rt = match name {

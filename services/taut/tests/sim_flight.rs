@@ -87,6 +87,54 @@ fn check_test_a(ok: bool, s: &Value) {
     }
 }
 
+const CHECK_RECORDING: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/py/check_recording.py");
+
+/// The acceptance test of the recorder: the PyPI `mcap` reader opens the real-time
+/// flight's recording, lists every channel with its schema, decodes every message, and finds
+/// per topic exactly what the services published minus the recorded drops (zero drops expected:
+/// each of the recorder's subscribers buffers 256 samples). Then the Rust reader: both drones,
+/// the truth, and their configs.
+fn check_recording(out: &Path) {
+    let output = Command::new("python3")
+        .arg(CHECK_RECORDING)
+        .arg(out)
+        .output()
+        .expect("python3 (run scripts/setup.sh for the mcap package)");
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    eprintln!("{stdout}{}", String::from_utf8_lossy(&output.stderr));
+    assert!(output.status.success(), "check_recording.py failed");
+    let result: Value = serde_json::from_str(
+        stdout
+            .lines()
+            .last()
+            .and_then(|l| l.strip_prefix("RESULT "))
+            .expect("a RESULT line"),
+    )
+    .unwrap();
+    assert_eq!(result["drops"], 0, "{result}");
+    // Per drone at least: raw ADC, tension, vehicle state, IMU, motor speeds, mission and
+    // attitude setpoints; plus the truth.
+    const AT_LEAST: u64 = 2 * 7 + 1;
+    let channels = result["channels"].as_u64().unwrap();
+    assert!(channels >= AT_LEAST, "{channels} channels: {result}");
+    let rec = recorder::Recording::open(&out.join("recording.mcap")).unwrap();
+    assert!(!rec.truncated);
+    let mut uavs = rec.uavs();
+    uavs.sort();
+    assert_eq!(uavs, ["uav1", "uav2"]);
+    for uav in ["uav1", "uav2"] {
+        let sp = rec
+            .samples::<shared_types::AttitudeSetpoint>(uav, shared_types::names::ATTITUDE_SETPOINT)
+            .unwrap();
+        assert!(sp.len() > 1000, "{uav}: {} setpoints", sp.len());
+        assert!(rec.attachments.contains_key(&format!("config/{uav}.toml")));
+    }
+    let truth = rec
+        .samples::<shared_types::PlantTruth>(shared_types::names::PLANT, shared_types::names::TRUTH)
+        .unwrap();
+    assert!(truth.len() > 1000, "{} truth samples", truth.len());
+}
+
 #[test]
 fn test_a_real_time_then_fast_agree() {
     let _one = ONE_FLIGHT_AT_A_TIME
@@ -95,6 +143,7 @@ fn test_a_real_time_then_fast_agree() {
     let rt_out = out_dir("a-rt");
     let (ok, rt) = fly(&["test-a", "--seed", "1"], &rt_out);
     check_test_a(ok, &rt);
+    check_recording(&rt_out);
     // Real-time latency was measured (tension sample to attitude setpoint, both drones).
     for span in ["uav1_tension_to_setpoint", "uav2_tension_to_setpoint"] {
         let p99 = f(&rt, &["latency_us", span, "p99"]);

@@ -1,6 +1,8 @@
 //! The real-time flight: the plant process and, per drone, the five service processes (each
 //! drone under its own id in one iceoryx2 root for this run), watched from here through the
-//! same topics the services use plus the plant's ground truth.
+//! same topics the services use plus the plant's ground truth. One recorder takes every topic
+//! of both drones and the truth into `<out>/recording.mcap`: started first and confirmed
+//! subscribed before anything publishes, stopped last so it drains what the others sent.
 
 use super::metrics::MetricsRecorder;
 use super::setup::{drone_config, scenario_arg_for_children, write_configs, Ports};
@@ -43,6 +45,7 @@ pub fn run(args: &SimArgs, scenario: &Scenario, out: &Path) -> Result<Summary, S
     let mut sup = Supervisor::new(cfgs[0].supervisor)?.log_to(&logs);
     let wall = Instant::now();
     let result = (|| {
+        start_recorder(&mut sup, out, &run_id, &cfgs, &cfg_paths, &socket_dir)?;
         let mut plant_args: Vec<String> = [
             "plant",
             "--scenario",
@@ -100,6 +103,46 @@ fn wait_for_file(path: &Path) -> Result<(), String> {
         std::thread::sleep(Duration::from_millis(10));
     }
     Err(format!("the plant did not open {}", path.display()))
+}
+
+/// The recording of this flight.
+pub const RECORDING: &str = "recording.mcap";
+
+/// Starts `taut record` for both drones and the truth, each drone's config attached, and waits
+/// until it is subscribed to every topic; the supervisor stops it after everything else.
+fn start_recorder(
+    sup: &mut Supervisor,
+    out: &Path,
+    root: &str,
+    cfgs: &[rt_config::Config; 2],
+    cfg_paths: &[std::path::PathBuf; 2],
+    socket_dir: &Path,
+) -> Result<(), String> {
+    let ready = socket_dir.join("recorder.ready");
+    let mut args: Vec<String> = vec![
+        "record".into(),
+        "--out".into(),
+        out.join(RECORDING).display().to_string(),
+        "--root".into(),
+        root.into(),
+        "--truth".into(),
+        "--ready".into(),
+        ready.display().to_string(),
+    ];
+    for (c, p) in cfgs.iter().zip(cfg_paths) {
+        args.extend(["--uav".into(), c.uav.clone()]);
+        args.extend(["--attach".into(), format!("{}={}", c.uav, p.display())]);
+    }
+    sup.start(ServiceSpec {
+        name: "recorder".into(),
+        args,
+    })?;
+    sup.stop_last("recorder");
+    if crate::supervisor::wait_for_file(&ready, Duration::from_secs(10)) {
+        Ok(())
+    } else {
+        Err("the recorder did not subscribe within 10 s (see logs/recorder.log)".into())
+    }
 }
 
 /// Watches the flight until it ends (done, failed, or interrupted).
