@@ -75,6 +75,9 @@ impl Recording {
 
     /// Parses a recording held in memory; `Err` only if not even the header is MCAP.
     pub fn from_bytes(bytes: &[u8]) -> Result<Self, String> {
+        if !bytes.starts_with(mcap::MAGIC) {
+            return Err("no MCAP magic at the start".into());
+        }
         let mut rec = Recording::default();
         // Pass 1: metadata and attachments (outside chunks).
         let records = LinearReader::new_with_options(bytes, Options::IgnoreEndMagic.into())
