@@ -256,11 +256,17 @@ mod tests {
             "tension_source = \"estimator\"",
         )
         .unwrap();
-        assert_eq!(cfg.controller.tension_source, crate::TensionSource::Estimator);
+        assert_eq!(
+            cfg.controller.tension_source,
+            crate::TensionSource::Estimator
+        );
         let err = with("law = \"proposed\"", "law = \"lqr\"").unwrap_err();
         assert!(err.contains("law") && err.contains("lqr"), "{err}");
         let err = with("tension_source = \"sensor\"", "tension_source = \"gps\"").unwrap_err();
-        assert!(err.contains("tension_source") && err.contains("gps"), "{err}");
+        assert!(
+            err.contains("tension_source") && err.contains("gps"),
+            "{err}"
+        );
         let err = with("kp = [2.16, 2.16, 4.2]", "kp = [2.16, -1.0, 4.2]").unwrap_err();
         assert!(err.contains("controller.geometric.kp[1]"), "{err}");
         let err = with("\ncutoff_hz = 10.0", "\ncutoff_hz = -3.0").unwrap_err();

@@ -28,6 +28,8 @@ pub enum ServiceName {
     Mission,
     /// MAVLink link to PX4: AttitudeSetpoint -> SET_ATTITUDE_TARGET, telemetry -> VehicleState.
     Px4Bridge,
+    /// ImuSample + MotorSpeeds -> TensionSample on TENSION_ESTIMATE (the paper's baseline).
+    ForceEstimator,
 }
 
 impl ServiceName {
@@ -39,6 +41,7 @@ impl ServiceName {
             ServiceName::Controller => "controller",
             ServiceName::Mission => "mission",
             ServiceName::Px4Bridge => "px4-bridge",
+            ServiceName::ForceEstimator => "force-estimator",
         }
     }
 }
@@ -91,6 +94,10 @@ pub fn run(args: &SvcArgs) -> Result<(), String> {
         // Applies cfg.services.px4_bridge itself (before starting its threads).
         ServiceName::Px4Bridge => {
             px4_bridge::shell::run(&crate::load_config(args.config.as_deref())?)
+        }
+        // Applies cfg.services.force_estimator itself.
+        ServiceName::ForceEstimator => {
+            force_estimator::shell::run(&crate::load_config(args.config.as_deref())?)
         }
         name => {
             let cfg = crate::load_config(args.config.as_deref())?;
