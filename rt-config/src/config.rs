@@ -1,6 +1,8 @@
 use serde::{Deserialize, Serialize};
 
-use crate::{ControllerConfig, MissionConfig, Px4Config, RecorderConfig, VehicleConfig};
+use crate::{
+    ControllerConfig, EstimatorConfig, MissionConfig, Px4Config, RecorderConfig, VehicleConfig,
+};
 use std::path::Path;
 
 use crate::validate::{self, ConfigError};
@@ -27,6 +29,8 @@ pub struct Config {
     pub vehicle: VehicleConfig,
     #[serde(default)]
     pub controller: ControllerConfig,
+    #[serde(default)]
+    pub estimator: EstimatorConfig,
     #[serde(default)]
     pub px4: Px4Config,
     #[serde(default)]
@@ -189,6 +193,8 @@ pub struct ServicesConfig {
     pub px4_bridge: ServiceRt,
     #[serde(default)]
     pub mission: ServiceRt,
+    #[serde(default)]
+    pub force_estimator: ServiceRt,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]

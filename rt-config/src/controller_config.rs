@@ -85,6 +85,77 @@ pub struct ControllerConfig {
     /// of T_d's magnitude the cable is taken as slack (the position cannot change the tension
     /// linearly, like a saturated actuator) and e_T is not integrated; the P part still acts.
     pub slack_tension_ratio: f64,
+    /// Which law flies the drone: `proposed` (the paper's cascade) or `geometric` (tracking
+    /// law with direct compensation of the cable force, the paper's baseline).
+    pub law: ControllerLaw,
+    /// Where the cable force comes from: `sensor` (TENSION), `estimator` (TENSION_ESTIMATE)
+    /// or `truth` (TENSION_TRUTH, simulation only).
+    pub tension_source: TensionSource,
+    /// Gains of the geometric law.
+    pub geometric: GeometricConfig,
+}
+
+/// The control law of [`ControllerConfig::law`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum ControllerLaw {
+    #[default]
+    Proposed,
+    Geometric,
+}
+
+/// The tension topic of [`ControllerConfig::tension_source`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum TensionSource {
+    /// The force sensor (the `tension` service).
+    #[default]
+    Sensor,
+    /// The model-based external-force estimator (the `force-estimator` service).
+    Estimator,
+    /// The plant's true anchor force (simulation only).
+    Truth,
+}
+
+impl ControllerLaw {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            ControllerLaw::Proposed => "proposed",
+            ControllerLaw::Geometric => "geometric",
+        }
+    }
+}
+
+impl TensionSource {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            TensionSource::Sensor => "sensor",
+            TensionSource::Estimator => "estimator",
+            TensionSource::Truth => "truth",
+        }
+    }
+}
+
+/// Gains of the geometric tracking law F = m (K_p e_p + K_v e_v + a_ref − g e3) − f_ext
+/// (diagonals, x y z in NED). Defaults: the cascade's equivalent proportional gains,
+/// K_p = K_vP ∘ K_P = (2.16, 2.16, 4.2) 1/s², K_v = K_vP = (2.7, 2.7, 6.0) 1/s (a = K_vP (K_P e_p
+/// − v) is the cascade without its integrals and derivative); no integral, as in the law.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct GeometricConfig {
+    /// Position gain, 1/s².
+    pub kp: [f64; 3],
+    /// Velocity gain, 1/s.
+    pub kv: [f64; 3],
+}
+
+impl Default for GeometricConfig {
+    fn default() -> Self {
+        Self {
+            kp: [2.16, 2.16, 4.2],
+            kv: [2.7, 2.7, 6.0],
+        }
+    }
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -121,6 +192,9 @@ impl Default for ControllerConfig {
             mission_max_age_s: 0.2,
             tension_shift_decay_s: 1.0,
             slack_tension_ratio: 0.3,
+            law: ControllerLaw::Proposed,
+            tension_source: TensionSource::Sensor,
+            geometric: GeometricConfig::default(),
         }
     }
 }
@@ -195,6 +269,8 @@ impl ControllerConfig {
             ("controller.k_vp", &self.k_vp),
             ("controller.k_vi", &self.k_vi),
             ("controller.k_vd", &self.k_vd),
+            ("controller.geometric.kp", &self.geometric.kp),
+            ("controller.geometric.kv", &self.geometric.kv),
             ("controller.max_tension_shift_m", &self.max_tension_shift_m),
             (
                 "controller.max_velocity_integral_m_s2",

@@ -4,6 +4,7 @@
 
 mod config;
 mod controller_config;
+mod estimator_config;
 mod mission_config;
 pub mod periodic;
 mod px4_config;
@@ -13,6 +14,7 @@ mod validate;
 
 pub use config::*;
 pub use controller_config::*;
+pub use estimator_config::*;
 pub use mission_config::*;
 pub use px4_config::*;
 pub use recorder_config::*;

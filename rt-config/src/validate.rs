@@ -91,6 +91,7 @@ pub(crate) fn validate(cfg: &Config) -> Result<(), String> {
     }
     cfg.vehicle.validate()?;
     cfg.controller.validate()?;
+    cfg.estimator.validate()?;
     cfg.mission.validate()?;
     cfg.px4.validate()?;
     cfg.recorder.validate()?;
@@ -99,6 +100,7 @@ pub(crate) fn validate(cfg: &Config) -> Result<(), String> {
     service("services.controller", &cfg.services.controller)?;
     service("services.px4_bridge", &cfg.services.px4_bridge)?;
     service("services.mission", &cfg.services.mission)?;
+    service("services.force_estimator", &cfg.services.force_estimator)?;
     let sup = &cfg.supervisor;
     positive("supervisor.backoff_initial_s", sup.backoff_initial_s)?;
     positive("supervisor.backoff_max_s", sup.backoff_max_s)?;
@@ -244,6 +246,32 @@ mod tests {
             let err = with(from, to).unwrap_err();
             assert!(err.contains(key), "{from} -> {to}: {err}");
         }
+    }
+
+    #[test]
+    fn baseline_keys_parse_and_bad_ones_are_named() {
+        let cfg = with("law = \"proposed\"", "law = \"geometric\"").unwrap();
+        assert_eq!(cfg.controller.law, crate::ControllerLaw::Geometric);
+        let cfg = with(
+            "tension_source = \"sensor\"",
+            "tension_source = \"estimator\"",
+        )
+        .unwrap();
+        assert_eq!(
+            cfg.controller.tension_source,
+            crate::TensionSource::Estimator
+        );
+        let err = with("law = \"proposed\"", "law = \"lqr\"").unwrap_err();
+        assert!(err.contains("law") && err.contains("lqr"), "{err}");
+        let err = with("tension_source = \"sensor\"", "tension_source = \"gps\"").unwrap_err();
+        assert!(
+            err.contains("tension_source") && err.contains("gps"),
+            "{err}"
+        );
+        let err = with("kp = [2.16, 2.16, 4.2]", "kp = [2.16, -1.0, 4.2]").unwrap_err();
+        assert!(err.contains("controller.geometric.kp[1]"), "{err}");
+        let err = with("\ncutoff_hz = 10.0", "\ncutoff_hz = -3.0").unwrap_err();
+        assert!(err.contains("estimator.cutoff_hz"), "{err}");
     }
 
     #[test]

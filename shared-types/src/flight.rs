@@ -177,6 +177,8 @@ pub mod setpoint_flags {
     pub const ARM_REQUEST: u32 = 1 << 7;
     /// The tension sample used was flagged by the tension stage.
     pub const TENSION_FLAGGED: u32 = 1 << 8;
+    /// The geometric baseline law computed this setpoint (`controller.law = "geometric"`).
+    pub const GEOMETRIC: u32 = 1 << 9;
 }
 
 /// Bits of [`AttitudeSetpoint::given_inputs`]: which inputs the step was handed (fresh or not).

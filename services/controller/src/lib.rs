@@ -19,6 +19,8 @@
 //!
 //! - [`formation`]: T_d, the static tension expected at the nominal setpoints.
 //! - [`mapping`]: desired acceleration and yaw -> quaternion and thrust.
+//! - [`geometric`]: the paper's baseline law (`controller.law = "geometric"`), F = m (K_p e_p +
+//!   K_v e_v + a_ref − g e3) − f_ext, with the same mapping, limits and input checks.
 //! - [`stage`]: [`ControllerStage`], one step from the newest inputs, with the input checks.
 //! - [`shell`]: the service loop (iceoryx2 topics, triggers, latency record).
 //!
@@ -43,7 +45,8 @@
 //! - No mission younger than `mission_max_age_s`: hold the position and yaw the vehicle had
 //!   when the mission went stale (latched, not re-read every step), loop off, STALE_MISSION,
 //!   and no ARM_REQUEST (it is only copied from a fresh mission).
-//! - The mission's velocity and acceleration are feed-forward the paper does not use: ignored.
+//! - The mission's velocity and acceleration are feed-forward the paper does not use: ignored
+//!   by the proposed law (the geometric law tracks them).
 //! - Thrust u = −F_d,z / (cos φ cos θ) with the CURRENT roll and pitch, the cosine floored at
 //!   0.5 ([`mapping::MIN_TILT_COSINE`]); tilt limited with vertical priority.
 //! - Any non-finite input (or a quaternion of norm outside 0.5..2) or result: level at the last
@@ -53,6 +56,7 @@
 
 pub mod filters;
 pub mod formation;
+pub mod geometric;
 pub mod loops;
 pub mod mapping;
 pub mod shell;

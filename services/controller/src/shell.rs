@@ -1,4 +1,5 @@
-//! The controller service: `<uav>-controller`, subscribes VEHICLE_STATE, TENSION and
+//! The controller service: `<uav>-controller`, subscribes VEHICLE_STATE, the tension topic of
+//! `controller.tension_source` (TENSION, TENSION_ESTIMATE or TENSION_TRUTH) and
 //! MISSION_SETPOINT, publishes ATTITUDE_SETPOINT, until SIGINT/SIGTERM.
 //!
 //! Triggers (`controller.trigger`):
@@ -17,7 +18,7 @@ use std::time::Duration;
 
 use hdrhistogram::Histogram;
 use rt_config::periodic::{now_ns, PeriodicLoop};
-use rt_config::{Config, ControllerTrigger};
+use rt_config::{Config, ControllerTrigger, TensionSource};
 use shared_types::{names, AttitudeSetpoint, MissionSetpoint, TensionSample, VehicleState};
 use taut_ipc::{stop_requested, Ipc, TopicPublisher, TopicSubscriber};
 
@@ -85,12 +86,20 @@ pub fn run(cfg: &Config) -> Result<(), String> {
     eprintln!("[controller] real-time: {report}");
     let mut stage =
         ControllerStage::new(&cfg.vehicle, &cfg.controller).map_err(|e| e.to_string())?;
+    eprintln!(
+        "[controller] law {}, tension from {} ({})",
+        cfg.controller.law.as_str(),
+        cfg.controller.tension_source.as_str(),
+        tension_topic(cfg.controller.tension_source)
+    );
     let ipc = Ipc::new(&format!("{}-controller", cfg.uav), &cfg.ipc_root, &cfg.uav)
         .map_err(|e| e.to_string())?;
     let e = |e: taut_ipc::IpcError| e.to_string();
     let mut ports = Ports {
         states: ipc.subscriber(names::VEHICLE_STATE).map_err(e)?,
-        tensions: ipc.subscriber(names::TENSION).map_err(e)?,
+        tensions: ipc
+            .subscriber(tension_topic(cfg.controller.tension_source))
+            .map_err(e)?,
         missions: ipc.subscriber(names::MISSION_SETPOINT).map_err(e)?,
         output: ipc.publisher(names::ATTITUDE_SETPOINT).map_err(e)?,
     };
@@ -171,6 +180,16 @@ pub fn run(cfg: &Config) -> Result<(), String> {
         LatencyRecord::summary(&record.from_odometry_us),
     );
     Ok(())
+}
+
+/// The topic of `controller.tension_source`: the sensor's TENSION, the estimator's
+/// TENSION_ESTIMATE, or the plant's TENSION_TRUTH (all `TensionSample`, pull on the drone, FRD).
+pub fn tension_topic(source: TensionSource) -> &'static str {
+    match source {
+        TensionSource::Sensor => names::TENSION,
+        TensionSource::Estimator => names::TENSION_ESTIMATE,
+        TensionSource::Truth => names::TENSION_TRUTH,
+    }
 }
 
 /// The newest queued sample, if any (older ones are dropped).

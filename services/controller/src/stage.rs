@@ -2,15 +2,16 @@
 //! checks (age, finiteness, armed) around it. See the crate doc for the conventions.
 
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
-use rt_config::{ControllerConfig, VehicleConfig};
+use rt_config::{ControllerConfig, ControllerLaw, VehicleConfig};
 use shared_types::{
     given_inputs, mission_flags, setpoint_flags, AttitudeSetpoint, MissionSetpoint, TensionSample,
     VehicleState,
 };
 
 use crate::formation::{static_tension, FormationRegime};
-use crate::loops::{ShiftGains, ShiftMode, TensionShift, VelocityGains, VelocityPid};
-use crate::mapping::{level, map_acceleration, yaw_of, MappingParams, ThrustLimit};
+use crate::geometric::GeometricGains;
+use crate::loops::{ShiftGains, TensionShift, VelocityGains, VelocityPid};
+use crate::mapping::{level, yaw_of, MappingParams, ThrustLimit};
 
 /// The step's dt (from consecutive `now_ns`) is clamped to this range, s.
 pub const MIN_DT_S: f64 = 1e-4;
@@ -71,6 +72,7 @@ pub struct ControllerStage {
     shift_gains: ShiftGains,
     velocity_gains: VelocityGains,
     mapping: MappingParams,
+    geometric: GeometricGains,
     state: LoopState,
     counters: ControllerCounters,
 }
@@ -125,6 +127,10 @@ impl ControllerStage {
                 max_tilt_rad: cfg.max_tilt_deg.to_radians(),
                 min_thrust_n: cfg.min_thrust_n,
                 max_thrust_n: cfg.max_thrust_n,
+            },
+            geometric: GeometricGains {
+                kp: cfg.geometric.kp.into(),
+                kv: cfg.geometric.kv.into(),
             },
             state: Self::fresh_state(cfg, 0.0),
             counters: ControllerCounters::default(),
@@ -278,7 +284,6 @@ impl ControllerStage {
         let mut s = self.state;
         s.last_now_ns = Some(now_ns);
         let position = Vector3::from(state.position_ned_m);
-        let velocity = Vector3::from(state.velocity_ned_m_s);
         let mut formation_limited = false;
         let (nominal, yaw_d, enabled) = match mission {
             Some(m) => {
@@ -297,33 +302,20 @@ impl ControllerStage {
         // T (force the drone exerts on the cable, NED) = −R(q) · (cable's pull, body FRD).
         let measured = tension.map(|t| -(q * Vector3::from(t.force_body_n)));
         s.shift.measure(measured.as_ref(), dt);
-        let mode = match (enabled, measured.is_some()) {
-            (false, _) => ShiftMode::Off,
-            (true, true) => ShiftMode::Active,
-            (true, false) => ShiftMode::Frozen,
-        };
         let desired_t = s.tension_desired_ned_n;
         let integrate = out.flags & setpoint_flags::STALE_ODOMETRY == 0;
-        let shift = s
-            .shift
-            .step(mode, &desired_t, integrate, dt, &self.shift_gains);
-        let setpoint = nominal + shift;
-        let v_d = self.velocity_setpoint(&(setpoint - position));
-        let e_v = v_d - velocity;
-        let a_d = s.velocity.output(&e_v, &velocity, dt, &self.velocity_gains);
-        let mapped = map_acceleration(&a_d, yaw_d, q, &self.mapping);
-        if integrate {
-            // Conditional integration: no further push into a saturated output.
-            let tilt = |i: usize| mapped.tilt_limited && e_v[i] * a_d[i] > 0.0;
-            let thrust = match mapped.thrust_limit {
-                ThrustLimit::Max => e_v.z < 0.0,
-                ThrustLimit::Min => e_v.z > 0.0,
-                ThrustLimit::None => false,
-            };
-            let blocked = [tilt(0), tilt(1), thrust];
-            s.velocity
-                .integrate(&e_v, blocked, dt, &self.velocity_gains);
-        }
+        let fresh = measured.is_some();
+        let law = match self.cfg.law {
+            ControllerLaw::Proposed => {
+                let inputs = (enabled, fresh, integrate, dt);
+                self.proposed(&mut s, inputs, &nominal, state, q, yaw_d)
+            }
+            ControllerLaw::Geometric => {
+                out.flags |= setpoint_flags::GEOMETRIC;
+                self.geometric_law(&s, (enabled, fresh), &nominal, mission, state, q, yaw_d)
+            }
+        };
+        let (setpoint, a_d, mapped) = (law.setpoint, law.acceleration, law.mapped);
         let t_f = s.shift.filter.value();
         let results_finite = mapped.thrust_n.is_finite()
             && mapped.attitude.coords.iter().all(|x| x.is_finite())
@@ -346,7 +338,7 @@ impl ControllerStage {
             out.flags |= setpoint_flags::THRUST_LIMITED;
             self.counters.thrust_limited_steps += 1;
         }
-        if let (ShiftMode::Active, Some(t)) = (mode, tension) {
+        if let (true, Some(t)) = (law.tension_used, tension) {
             out.header.t_origin_ns = t.header.t_origin_ns;
             out.tension_origin_ns = t.header.t_origin_ns;
             out.tension_sequence = t.header.sequence;
@@ -383,6 +375,9 @@ impl ControllerStage {
 fn wxyz(q: &UnitQuaternion<f64>) -> [f64; 4] {
     [q.w, q.i, q.j, q.k]
 }
+
+#[path = "stage_laws.rs"]
+mod laws;
 
 #[cfg(test)]
 #[path = "stage_tests.rs"]

@@ -1,29 +1,42 @@
 //! `ControllerStage::step` must not allocate: a counting global allocator watches every branch
-//! (active tension, stale tension, slack, saturation, stale mission, non-finite, idle).
+//! (active tension, stale tension, slack, saturation, stale mission, non-finite, idle), for
+//! both laws. Allocations are counted per thread: the test harness's own thread allocates
+//! while it waits, which made a global count flaky.
 
 use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::cell::Cell;
 
 use controller::ControllerStage;
-use rt_config::{ControllerConfig, VehicleConfig};
+use rt_config::{ControllerConfig, ControllerLaw, VehicleConfig};
 use shared_types::{
     mission_flags, vehicle_flags, Header, MissionSetpoint, TensionSample, VehicleState,
 };
 
 struct Counting;
 
-static ALLOCATIONS: AtomicU64 = AtomicU64::new(0);
+thread_local! {
+    // Const-initialised, no destructor: reading it never allocates.
+    static ALLOCATIONS: Cell<u64> = const { Cell::new(0) };
+}
+
+fn count() {
+    ALLOCATIONS.with(|c| c.set(c.get() + 1));
+}
+
+fn allocations() -> u64 {
+    ALLOCATIONS.with(|c| c.get())
+}
 
 unsafe impl GlobalAlloc for Counting {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        count();
         unsafe { System.alloc(layout) }
     }
     unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
         unsafe { System.dealloc(ptr, layout) }
     }
     unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        count();
         unsafe { System.realloc(ptr, layout, new_size) }
     }
 }
@@ -41,14 +54,23 @@ fn header(t: u64) -> Header {
 
 #[test]
 fn step_does_not_allocate_on_any_branch() {
-    let mut stage =
-        ControllerStage::new(&VehicleConfig::default(), &ControllerConfig::default()).unwrap();
+    for law in [ControllerLaw::Proposed, ControllerLaw::Geometric] {
+        no_allocation_with(law);
+    }
+}
+
+fn no_allocation_with(law: ControllerLaw) {
+    let cfg = ControllerConfig {
+        law,
+        ..Default::default()
+    };
+    let mut stage = ControllerStage::new(&VehicleConfig::default(), &cfg).unwrap();
     let mut outputs = [0.0f64; 2000];
     // The counter sees allocations (so the check below can fail).
-    let probe = ALLOCATIONS.load(Ordering::SeqCst);
+    let probe = allocations();
     drop(std::hint::black_box(Box::new(1u64)));
-    assert!(ALLOCATIONS.load(Ordering::SeqCst) > probe);
-    let before = ALLOCATIONS.load(Ordering::SeqCst);
+    assert!(allocations() > probe);
+    let before = allocations();
     for k in 0..2000u64 {
         let t = k * 10_000_000;
         let phase = k / 200;
@@ -87,8 +109,8 @@ fn step_does_not_allocate_on_any_branch() {
         let sp = stage.step(t, &state, Some(&tension), Some(&mission));
         outputs[k as usize] = sp.thrust_n;
     }
-    let after = ALLOCATIONS.load(Ordering::SeqCst);
-    assert_eq!(after - before, 0, "allocations in 2000 steps");
+    let after = allocations();
+    assert_eq!(after - before, 0, "allocations in 2000 steps of {law:?}");
     assert!(outputs.iter().all(|u| u.is_finite()));
     let c = stage.counters();
     // Every branch was visited.

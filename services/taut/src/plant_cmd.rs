@@ -1,6 +1,8 @@
 //! `taut plant`: the plant alone, in real time (paced by absolute CLOCK_MONOTONIC deadlines) or
 //! fast (in simulated time). In real time it serves, per drone, a MAVLink endpoint on PX4 SITL's
-//! ports and the force sensor's emulated I2C bus, and publishes the ground truth; any MAVLink
+//! ports and the force sensor's emulated I2C bus, and publishes the ground truth (PlantTruth on
+//! `plant/truth` at 100 Hz, and each drone's true anchor force as a TensionSample on
+//! `<uav>/tension_truth` every [`TRUTH_TENSION_PERIOD_NS`]); any MAVLink
 //! client can fly it. `--pilot` flies the scenario itself with PX4's position controller (for
 //! benchmarks and for watching the plant alone).
 
@@ -8,7 +10,7 @@ use clap::Args;
 use latency_tests::{Percentiles, SpanHistograms};
 use rt_config::periodic::{now_ns, PeriodicLoop};
 use serde::Serialize;
-use shared_types::{names, PlantTruth};
+use shared_types::{names, PlantTruth, TensionSample};
 use sim_plant::mavlink_link::{LinkConfig, LinkCounters, MavlinkEndpoint};
 use sim_plant::pilot::ScenarioPilot;
 use sim_plant::plant::{Plant, PlantConfig};
@@ -20,6 +22,22 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::Instant;
 use taut_ipc::{install_stop_handler, stop_requested, Ipc};
+
+/// Period of the true anchor force on TENSION_TRUTH (500 Hz: above the sensor's 240 Hz, so the
+/// `truth` tension source is never the slower one), ns.
+pub const TRUTH_TENSION_PERIOD_NS: u64 = 2_000_000;
+
+/// Drone `k`'s true anchor force (the cable's pull on it, body FRD) as a TensionSample with
+/// `t_origin_ns` = the plant instant it belongs to (the caller's clock).
+pub fn truth_tension(plant: &Plant, k: usize, t_origin_ns: u64) -> TensionSample {
+    let mut s = TensionSample {
+        force_body_n: plant.anchor_force_frd(k),
+        ..Default::default()
+    };
+    s.force_sensor_n = s.force_body_n;
+    s.header.t_origin_ns = t_origin_ns;
+    s
+}
 
 #[derive(Args, Debug, Clone)]
 pub struct PlantArgs {
@@ -264,6 +282,18 @@ fn run_real_time(
     let mut truth_pub = ipc
         .publisher::<PlantTruth>(names::TRUTH)
         .map_err(|e| e.to_string())?;
+    // Each drone's true force under that drone's id, as its tension topics are.
+    let drone_ipc = |i: usize| {
+        let id = &scenario.drones[i].id;
+        Ipc::new(&format!("plant-{id}"), &args.ipc_root, id).map_err(|e| e.to_string())
+    };
+    let drone_ipcs = [drone_ipc(0)?, drone_ipc(1)?];
+    let tension_pub = |i: usize| {
+        drone_ipcs[i]
+            .publisher::<TensionSample>(names::TENSION_TRUTH)
+            .map_err(|e| e.to_string())
+    };
+    let mut tension_truth_pubs = [tension_pub(0)?, tension_pub(1)?];
     let mut pilot = match args.pilot {
         true => Some(
             ScenarioPilot::new(scenario, &cfg.inner_loops.position).map_err(|e| e.to_string())?,
@@ -303,6 +333,7 @@ fn run_real_time(
     let mut max_lag_ns = 0u64;
     let truth_period_ns = 10_000_000;
     let mut next_truth_ns = t0;
+    let mut next_tension_truth_ns = t0;
     let end_ns = args.duration.map(|d| t0 + (d * 1e9) as u64);
     let wall = Instant::now();
     let max_steps_per_tick = (4 * tick_ns / plant.dt_ns()).max(1);
@@ -338,6 +369,13 @@ fn run_real_time(
         }
         for (i, s) in sensors.iter().enumerate() {
             s.drive(now, plant.anchor_force_frd(i));
+        }
+        if now >= next_tension_truth_ns {
+            next_tension_truth_ns += TRUTH_TENSION_PERIOD_NS;
+            for (i, p) in tension_truth_pubs.iter_mut().enumerate() {
+                // A full subscriber queue is the subscriber's problem; the plant keeps time.
+                let _ = p.publish(truth_tension(&plant, i, t0 + plant.time_ns()));
+            }
         }
         if now >= next_truth_ns {
             next_truth_ns += truth_period_ns;

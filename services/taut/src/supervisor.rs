@@ -222,11 +222,14 @@ pub fn sensor_services(config_path: &Path) -> Vec<ServiceSpec> {
     services(config_path, &["adc-sampler", "tension"])
 }
 
-/// Every service of one drone (`taut launch`), in start order.
-pub const FLIGHT_SERVICES: [&str; 5] = [
+/// Every service of one drone (`taut launch`), in start order. The force estimator runs
+/// whatever the controller's tension source, so every flight has the sensor's and the
+/// estimator's force to compare.
+pub const FLIGHT_SERVICES: [&str; 6] = [
     "adc-sampler",
     "tension",
     "px4-bridge",
+    "force-estimator",
     "controller",
     "mission",
 ];

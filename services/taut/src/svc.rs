@@ -30,6 +30,8 @@ pub enum ServiceName {
     Px4Bridge,
     /// Every topic of the drone -> an MCAP file in `recorder.dir` (not real-time).
     Recorder,
+    /// ImuSample + MotorSpeeds -> TensionSample on TENSION_ESTIMATE (the paper's baseline).
+    ForceEstimator,
 }
 
 impl ServiceName {
@@ -42,6 +44,7 @@ impl ServiceName {
             ServiceName::Mission => "mission",
             ServiceName::Px4Bridge => "px4-bridge",
             ServiceName::Recorder => "recorder",
+            ServiceName::ForceEstimator => "force-estimator",
         }
     }
 }
@@ -102,6 +105,10 @@ pub fn run(args: &SvcArgs) -> Result<(), String> {
             &crate::load_config(args.config.as_deref())?,
             args.ready.as_deref(),
         ),
+        // Applies cfg.services.force_estimator itself.
+        ServiceName::ForceEstimator => {
+            force_estimator::shell::run(&crate::load_config(args.config.as_deref())?)
+        }
         name => {
             let cfg = crate::load_config(args.config.as_deref())?;
             let rt = match name {

@@ -35,7 +35,7 @@ fn children(parent: u32, needle: &str) -> Vec<u32> {
 }
 
 /// iceoryx2 nodes of a running drone: one per service, two for the bridge.
-const NODES: usize = 6;
+const NODES: usize = 7;
 
 /// A free TCP/UDP port number on loopback (probed by binding).
 fn free_port() -> u16 {
@@ -132,11 +132,12 @@ fn launch_restarts_a_crashed_service_and_stops_cleanly() {
         .spawn()
         .unwrap();
     let lp = launch.id();
-    wait_for("all five services", Duration::from_secs(10), || {
+    wait_for("all six services", Duration::from_secs(10), || {
         [
             "adc-sampler",
             "tension",
             "px4-bridge",
+            "force-estimator",
             "controller",
             "mission",
         ]

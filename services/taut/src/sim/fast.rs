@@ -12,24 +12,30 @@
 //! - No scheduling or IPC delays: a stage's output is seen by the next at the same simulated
 //!   instant (the real-time latencies are tens of µs to a few ms, see the summary).
 //! - The plant's clock is the only clock: every `t_origin_ns` is simulated time.
+//!
+//! The baselines run here as in real time: the force estimator is fed the bridge's IMU and
+//! motor-speed telemetry (at the rates the bridge asks for), the plant's true anchor force is
+//! a TensionSample every 2 ms (TENSION_TRUTH), and each controller takes the source and law of
+//! its config (`taut sim --law / --tension-source`).
 
+use super::force_metrics::ForceSource;
 use super::metrics::MetricsRecorder;
 use super::summary::Summary;
 use super::trace::Trace;
 use super::{new_recorder, Outcome, SimArgs};
 use adc_sampler::mcp3423::{Reading, SampleRate};
 use controller::ControllerStage;
+use force_estimator::ForceEstimator;
 use mission::{MissionStage, PeerSignal};
-use px4_bridge::mavlink::dialects::common::{MavMessage, MavResult, COMMAND_ACK_DATA};
+use px4_bridge::mavlink::dialects::common::MavMessage;
 use px4_bridge::mavlink::MavHeader;
 use px4_bridge::{OffboardLink, Telemetry};
-use rt_config::Config;
+use rt_config::{Config, TensionSource};
 use shared_types::{
     AttitudeSetpoint, ChannelStatus, MissionSetpoint, RawAdcFrame, SamplingMode, TensionSample,
     VehicleState,
 };
-use sim_plant::mavlink_link::inbound::{attitude_target, CommandLong};
-use sim_plant::mavlink_link::{outbound, IntervalRequest, LinkConfig, Stream, StreamSchedule};
+use sim_plant::mavlink_link::{outbound, LinkConfig, Stream, StreamSchedule};
 use sim_plant::plant::{Plant, PlantConfig};
 use sim_plant::scenario::Scenario;
 use sim_plant::sensor::{BusConfig, LoadProfile, SensorBus, SensorModel, SensorParams};
@@ -42,6 +48,10 @@ const MAV_CMD_SET_MESSAGE_INTERVAL: u16 = 511;
 const SENSOR_HOLD_NS: u64 = 1_000_000;
 /// The plant publishes its truth at 100 Hz in real time; the metrics see it at the same rate.
 const TRUTH_PERIOD_NS: u64 = 10_000_000;
+use crate::plant_cmd::TRUTH_TENSION_PERIOD_NS;
+
+#[path = "fast_link.rs"]
+mod link;
 
 /// One drone's companion side, in process.
 struct FastDrone {
@@ -59,6 +69,11 @@ struct FastDrone {
     raw_sequence: u64,
     last_codes: [i16; 4],
     newest_tension: Option<TensionSample>,
+    estimator: ForceEstimator,
+    newest_estimate: Option<TensionSample>,
+    /// Estimates made since the metrics last saw them (at most one per IMU message).
+    estimate_pending: bool,
+    newest_truth_tension: Option<TensionSample>,
     newest_state: Option<VehicleState>,
     newest_mission: Option<MissionSetpoint>,
     state_pending: bool,
@@ -88,6 +103,8 @@ impl FastDrone {
             .map_err(|e| format!("{}: {e}", cfg.uav))?;
         let link =
             OffboardLink::new(&cfg.px4, &cfg.vehicle).map_err(|e| format!("{}: {e}", cfg.uav))?;
+        let estimator = ForceEstimator::new(&cfg.vehicle, &cfg.estimator)
+            .map_err(|e| format!("{}: {e}", cfg.uav))?;
         let plant_link = LinkConfig::px4_sitl(k as u8);
         Ok(FastDrone {
             tension: TensionStage::new(TensionStageConfig::from_config(&cfg)),
@@ -98,6 +115,10 @@ impl FastDrone {
             raw_sequence: 0,
             last_codes: [0; 4],
             newest_tension: None,
+            estimator,
+            newest_estimate: None,
+            estimate_pending: false,
+            newest_truth_tension: None,
             newest_state: None,
             newest_mission: None,
             state_pending: false,
@@ -160,70 +181,29 @@ impl FastDrone {
             component_id: self.plant_link.component_id,
             sequence: 0,
         };
-        if let Some(Telemetry::State(mut s)) = self.link.on_message(t_ns, &header, msg) {
-            s.header.t_publish_ns = t_ns;
-            self.newest_state = Some(s);
-            self.state_pending = true;
+        match self.link.on_message(t_ns, &header, msg) {
+            Some(Telemetry::State(mut s)) => {
+                s.header.t_publish_ns = t_ns;
+                self.newest_state = Some(s);
+                self.state_pending = true;
+            }
+            Some(Telemetry::Imu(s)) => {
+                let mut e = self.estimator.on_imu(&s);
+                e.header.t_publish_ns = t_ns;
+                self.newest_estimate = Some(e);
+                self.estimate_pending = true;
+            }
+            Some(Telemetry::Motors(m)) => self.estimator.on_motor_speeds(&m),
+            None => {}
         }
     }
 
-    /// A message from the bridge to the emulated PX4 (what the plant's endpoint would do with it).
-    fn deliver_to_plant(&mut self, plant: &mut Plant, k: usize, t_ns: u64, msg: &MavMessage) {
-        let (sys, comp) = (self.plant_link.system_id, self.plant_link.component_id);
-        match msg {
-            MavMessage::SET_ATTITUDE_TARGET(d) => {
-                if let Some(inbound) = attitude_target(d, sys, comp) {
-                    plant.handle(k, inbound);
-                }
-            }
-            MavMessage::HEARTBEAT(_) => {
-                plant.handle(
-                    k,
-                    sim_plant::mavlink_link::Inbound::Heartbeat {
-                        sysid: self.cfg.px4.system_id,
-                        compid: self.cfg.px4.component_id,
-                    },
-                );
-            }
-            MavMessage::COMMAND_LONG(d) => {
-                let cmd = CommandLong::from_parsed(d);
-                if !cmd.is_for(sys, comp) {
-                    return;
-                }
-                let result = if cmd.command == MAV_CMD_SET_MESSAGE_INTERVAL {
-                    let stream = (cmd.params[0] >= 0.0)
-                        .then(|| Stream::from_message_id(cmd.params[0] as u32))
-                        .flatten();
-                    match (stream, IntervalRequest::from_param_us(cmd.params[1])) {
-                        (Some(stream), Some(req)) => {
-                            self.streams.set(stream, req, t_ns);
-                            MavResult::MAV_RESULT_ACCEPTED
-                        }
-                        _ => MavResult::MAV_RESULT_DENIED,
-                    }
-                } else {
-                    plant
-                        .handle(
-                            k,
-                            sim_plant::mavlink_link::Inbound::Command {
-                                command: cmd.command,
-                                params: cmd.params,
-                                from: (self.cfg.px4.system_id, self.cfg.px4.component_id),
-                            },
-                        )
-                        .unwrap_or(MavResult::MAV_RESULT_UNSUPPORTED)
-                };
-                let ack = MavMessage::COMMAND_ACK(COMMAND_ACK_DATA {
-                    command: d.command,
-                    result,
-                    progress: 0,
-                    result_param2: 0,
-                    target_system: self.cfg.px4.system_id,
-                    target_component: self.cfg.px4.component_id,
-                });
-                self.deliver_to_bridge(t_ns, &ack);
-            }
-            _ => {}
+    /// The newest sample of the controller's tension source (`controller.tension_source`).
+    fn tension_for_controller(&self) -> Option<&TensionSample> {
+        match self.cfg.controller.tension_source {
+            TensionSource::Sensor => self.newest_tension.as_ref(),
+            TensionSource::Estimator => self.newest_estimate.as_ref(),
+            TensionSource::Truth => self.newest_truth_tension.as_ref(),
         }
     }
 }
@@ -242,7 +222,7 @@ pub fn run(args: &SimArgs, scenario: &Scenario) -> Result<Summary, String> {
     };
     let mut drones = Vec::new();
     for k in 0..2 {
-        let cfg = super::setup::drone_config(
+        let mut cfg = super::setup::drone_config(
             &args.scenario,
             scenario,
             k,
@@ -250,6 +230,7 @@ pub fn run(args: &SimArgs, scenario: &Scenario) -> Result<Summary, String> {
             std::path::Path::new("/nonexistent"),
             &ports,
         );
+        super::BaselineOverrides::of(args).apply(&mut cfg);
         drones.push(FastDrone::new(cfg, scenario, k, args.seed)?);
     }
     let mut rec = new_recorder(scenario);
@@ -258,6 +239,7 @@ pub fn run(args: &SimArgs, scenario: &Scenario) -> Result<Summary, String> {
     let wall = Instant::now();
     let mut next_truth_ns = 0;
     let mut next_hold_ns = 0;
+    let mut next_truth_tension_ns = 0;
     let mut trace = match &args.trace {
         Some(p) => Some(Trace::create(p)?),
         None => None,
@@ -270,7 +252,7 @@ pub fn run(args: &SimArgs, scenario: &Scenario) -> Result<Summary, String> {
             &mut drones,
             &mut rec,
             t,
-            &mut next_hold_ns,
+            (&mut next_hold_ns, &mut next_truth_tension_ns),
             &mut trace,
         );
         if t >= next_truth_ns {
@@ -303,12 +285,16 @@ fn fly_companions(
     drones: &mut [FastDrone],
     rec: &mut MetricsRecorder,
     t: u64,
-    next_hold_ns: &mut u64,
+    (next_hold_ns, next_truth_tension_ns): (&mut u64, &mut u64),
     trace: &mut Option<Trace>,
 ) {
     let drive_sensor = t >= *next_hold_ns;
     if drive_sensor {
         *next_hold_ns += SENSOR_HOLD_NS;
+    }
+    let publish_truth = t >= *next_truth_tension_ns;
+    if publish_truth {
+        *next_truth_tension_ns += TRUTH_TENSION_PERIOD_NS;
     }
     for (k, d) in drones.iter_mut().enumerate() {
         if drive_sensor {
@@ -316,9 +302,17 @@ fn fly_companions(
             d.sensor
                 .set_profile(LoadProfile::Constant(plant.anchor_force_frd(k)), 0);
         }
+        if publish_truth {
+            let s = crate::plant_cmd::truth_tension(plant, k, t);
+            rec.on_force_truth(k, &s);
+            d.newest_truth_tension = Some(s);
+        }
         if t >= d.next_frame_ns {
             d.next_frame_ns += d.frame_period_ns;
             d.sample_sensor(t);
+            if let Some(s) = &d.newest_tension {
+                rec.on_force_sample(k, ForceSource::Sensor, s);
+            }
         }
         // Telemetry the emulated PX4 streams now.
         let tel = plant.telemetry(k);
@@ -340,6 +334,12 @@ fn fly_companions(
         }
         // Keep the buffer's capacity for the next tick.
         d.outbox = outbox;
+        if d.estimate_pending {
+            d.estimate_pending = false;
+            if let Some(e) = &d.newest_estimate {
+                rec.on_force_sample(k, ForceSource::Estimator, e);
+            }
+        }
     }
     // Missions at their rate, each seeing the other's newest signal.
     for k in 0..2 {
@@ -380,12 +380,10 @@ fn fly_companions(
         };
         d.state_pending = false;
         d.next_controller_ns = t + d.controller_period_ns;
-        let mut sp: AttitudeSetpoint = d.controller.step(
-            t,
-            &state,
-            d.newest_tension.as_ref(),
-            d.newest_mission.as_ref(),
-        );
+        let tension = d.tension_for_controller().copied();
+        let mut sp: AttitudeSetpoint =
+            d.controller
+                .step(t, &state, tension.as_ref(), d.newest_mission.as_ref());
         sp.header.t_publish_ns = t;
         rec.on_setpoint(k, &sp, false);
         if let Some(tr) = trace.as_mut() {

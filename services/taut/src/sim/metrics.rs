@@ -17,11 +17,17 @@
 //!   that line). Along-the-line offsets (unequal heights, noise) are a stiff mode of the taut
 //!   triangle, not a swing. Measured from the payload's lift-off (Test A) or the first Move
 //!   (payload hanging from the start); settling time = last instant above 2° minus that start.
+//!   So `swing_rms_deg` is the swing RMS after the drop (lift-off) in Test A.
+//! - Force sources against the truth (`force_rmse`): see [`super::force_metrics`].
 
 use latency_tests::{Percentiles, SpanHistograms};
 use nalgebra::{UnitQuaternion, Vector3};
 use serde::Serialize;
-use shared_types::{AttitudeSetpoint, ContactKind, MissionPhase, MissionSetpoint, PlantTruth};
+use shared_types::{
+    AttitudeSetpoint, ContactKind, MissionPhase, MissionSetpoint, PlantTruth, TensionSample,
+};
+
+use super::force_metrics::{ForceErrors, ForceRmse, ForceSource};
 
 /// Window of the z steady-state error, s.
 pub const STEADY_WINDOW_S: f64 = 3.0;
@@ -59,6 +65,8 @@ pub struct DroneMetrics {
     /// Controller steps without a fresh tension sample.
     pub position_only_steps: u64,
     pub setpoints: u64,
+    /// Sensor, estimator and used force against the true anchor force, airborne.
+    pub force_rmse: ForceRmse,
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -120,6 +128,7 @@ pub struct MetricsRecorder {
     swing: Vec<(f64, f64)>,
     max_cable_force_n: f64,
     spans: SpanHistograms,
+    forces: ForceErrors,
 }
 
 impl MetricsRecorder {
@@ -152,6 +161,7 @@ impl MetricsRecorder {
             swing: Vec::new(),
             max_cable_force_n: 0.0,
             spans: SpanHistograms::new(&SPANS),
+            forces: ForceErrors::default(),
         }
     }
 
@@ -179,8 +189,19 @@ impl MetricsRecorder {
         Some((i, self.phase_names[i].clone(), t_s))
     }
 
+    /// Drone `k`'s true anchor force (TENSION_TRUTH).
+    pub fn on_force_truth(&mut self, k: usize, s: &TensionSample) {
+        self.forces.on_truth_tension(k, s);
+    }
+
+    /// A sample of drone `k`'s force sensor (TENSION) or estimator (TENSION_ESTIMATE).
+    pub fn on_force_sample(&mut self, k: usize, source: ForceSource, s: &TensionSample) {
+        self.forces.on_sample(k, source, s);
+    }
+
     /// A controller output of drone `k` (carries its inputs' times and T_d, T_f).
     pub fn on_setpoint(&mut self, k: usize, sp: &AttitudeSetpoint, realtime: bool) {
+        self.forces.on_setpoint(k, sp);
         let acc = &mut self.drones[k];
         acc.setpoints += 1;
         if sp.flags & shared_types::setpoint_flags::POSITION_ONLY != 0
@@ -228,6 +249,7 @@ impl MetricsRecorder {
                 Some(truth.header.t_origin_ns as i128 - truth.sim_time_ns as i128);
         }
         let t_s = truth.sim_time_ns as f64 * 1e-9;
+        self.forces.on_truth(truth);
         for c in truth.cable_tension_n {
             if c.is_finite() {
                 self.max_cable_force_n = self.max_cable_force_n.max(c);
@@ -332,6 +354,7 @@ impl MetricsRecorder {
                     crash_flags: truth.drones[k].crash_flags,
                     position_only_steps: a.position_only,
                     setpoints: a.setpoints,
+                    force_rmse: self.forces.rmse(k),
                 }
             })
             .collect();

@@ -5,6 +5,7 @@
 //! a dead service.
 
 pub mod fast;
+pub mod force_metrics;
 pub mod metrics;
 mod realtime;
 mod setup;
@@ -45,6 +46,75 @@ pub struct SimArgs {
     /// Fast mode: write every controller step of both drones to this CSV (for plots).
     #[arg(long)]
     pub trace: Option<PathBuf>,
+    /// Control law of both drones (default: the config's, `proposed`).
+    #[arg(long, value_enum)]
+    pub law: Option<Law>,
+    /// Where both drones' controllers take the cable force from (default: the config's,
+    /// `sensor`).
+    #[arg(long, value_enum)]
+    pub tension_source: Option<Source>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Law {
+    Proposed,
+    Geometric,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Source {
+    Sensor,
+    Estimator,
+    Truth,
+}
+
+/// The baseline choices of a run: `--law` and `--tension-source` over the drones' configs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct BaselineOverrides {
+    pub law: Option<Law>,
+    pub tension_source: Option<Source>,
+}
+
+impl BaselineOverrides {
+    pub fn of(args: &SimArgs) -> Self {
+        Self {
+            law: args.law,
+            tension_source: args.tension_source,
+        }
+    }
+
+    /// Writes the choices into a drone's config (so the effective config the sim writes
+    /// carries them to the real-time services).
+    pub fn apply(&self, cfg: &mut rt_config::Config) {
+        use rt_config::{ControllerLaw, TensionSource};
+        if let Some(l) = self.law {
+            cfg.controller.law = match l {
+                Law::Proposed => ControllerLaw::Proposed,
+                Law::Geometric => ControllerLaw::Geometric,
+            };
+        }
+        if let Some(s) = self.tension_source {
+            cfg.controller.tension_source = match s {
+                Source::Sensor => TensionSource::Sensor,
+                Source::Estimator => TensionSource::Estimator,
+                Source::Truth => TensionSource::Truth,
+            };
+        }
+    }
+}
+
+/// The overrides of this process's `taut sim`, read by `setup::drone_config` (the real-time
+/// run builds its configs there; one `taut sim` per process).
+static OVERRIDES: std::sync::Mutex<BaselineOverrides> = std::sync::Mutex::new(BaselineOverrides {
+    law: None,
+    tension_source: None,
+});
+
+/// Applies this process's `--law` / `--tension-source` to `cfg`.
+pub(crate) fn apply_overrides(cfg: &mut rt_config::Config) {
+    if let Ok(o) = OVERRIDES.lock() {
+        o.apply(cfg);
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -66,13 +136,25 @@ pub fn run(args: &SimArgs) -> Result<(), String> {
         PathBuf::from("sim-out").join(format!("{}-seed{}", scenario.name, args.seed))
     });
     std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
+    if let Ok(mut o) = OVERRIDES.lock() {
+        *o = BaselineOverrides::of(args);
+    }
     taut_ipc::install_stop_handler();
     println!(
-        "[sim] {} seed {} ({}), noise {}, output in {}",
+        "[sim] {} seed {} ({}), noise {}, law {}, tension source {}, output in {}",
         scenario.name,
         args.seed,
         if args.fast { "fast" } else { "real time" },
         if args.no_noise { "off" } else { "on" },
+        args.law.map_or("from config", |l| match l {
+            Law::Proposed => "proposed",
+            Law::Geometric => "geometric",
+        }),
+        args.tension_source.map_or("from config", |s| match s {
+            Source::Sensor => "sensor",
+            Source::Estimator => "estimator",
+            Source::Truth => "truth",
+        }),
         out.display()
     );
     let summary = if args.fast {
@@ -172,11 +254,15 @@ impl Outcome {
                 .is_none()
                 .then(|| "the scenario did not complete".to_string())
         });
+        let mut cfg = rt_config::Config::embedded_sim();
+        BaselineOverrides::of(args).apply(&mut cfg);
         Summary {
             scenario: scenario.name.clone(),
             seed: args.seed,
             noise: !args.no_noise,
             mode,
+            law: cfg.controller.law.as_str(),
+            tension_source: cfg.controller.tension_source.as_str(),
             success: failure.is_none(),
             failure,
             sim_s: self.sim_s,

@@ -13,6 +13,9 @@ pub struct Summary {
     pub noise: bool,
     /// `real-time` or `fast`.
     pub mode: &'static str,
+    /// Both drones' `controller.law` and `controller.tension_source`.
+    pub law: &'static str,
+    pub tension_source: &'static str,
     /// Every phase ended, no crash, no failsafe, no service died.
     pub success: bool,
     pub failure: Option<String>,
@@ -40,11 +43,13 @@ impl fmt::Display for Summary {
         let m = &self.metrics;
         writeln!(
             f,
-            "{} seed {} ({}, noise {}): {} after {:.1} s simulated in {:.1} s",
+            "{} seed {} ({}, noise {}, {} law, {} tension): {} after {:.1} s simulated in {:.1} s",
             self.scenario,
             self.seed,
             self.mode,
             if self.noise { "on" } else { "off" },
+            self.law,
+            self.tension_source,
             match &self.failure {
                 None => "SUCCESS".to_string(),
                 Some(why) => format!("FAILED: {why}"),
@@ -63,6 +68,22 @@ impl fmt::Display for Summary {
                 opt(d.final_position_error_m, 3),
                 d.failsafe_count,
                 d.crash_flags
+            )?;
+        }
+        for d in &m.drones {
+            let r = &d.force_rmse;
+            let show = |a: &Option<super::force_metrics::AxisRmse>| {
+                a.map_or("-".into(), |a| {
+                    format!("{:.2} ({:.2}, {:.2}, {:.2})", a.norm, a.x, a.y, a.z)
+                })
+            };
+            writeln!(
+                f,
+                "  {} force RMSE vs truth, N (norm (x, y, z)): sensor {} FRD, estimator {} FRD, used {} NED",
+                d.id,
+                show(&r.sensor_frd_n),
+                show(&r.estimator_frd_n),
+                show(&r.used_ned_n)
             )?;
         }
         let p = &m.payload;
