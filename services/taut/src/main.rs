@@ -11,6 +11,7 @@ mod replay;
 mod report;
 mod sensor;
 mod sim;
+mod study;
 mod supervisor;
 mod svc;
 
@@ -60,6 +61,9 @@ enum Command {
     Svc(svc::SvcArgs),
     /// Run the controller library again on a recording's inputs; check its setpoints bit for bit.
     Replay(replay::ReplayArgs),
+    /// The paper's comparison: Test A in fast mode for every controller law x tension source x
+    /// seed; a table of mean and spread, and Fig. 9.
+    Study(study::StudyArgs),
 }
 
 #[derive(Subcommand)]
@@ -95,6 +99,7 @@ fn main() -> ExitCode {
         Command::Bench(args) => bench::run(&args),
         Command::Svc(args) => svc::run(&args),
         Command::Replay(args) => replay::run(&args),
+        Command::Study(args) => study::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

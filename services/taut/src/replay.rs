@@ -75,8 +75,8 @@ fn by_sequence<T: Recordable>(samples: Vec<Timed<T>>) -> HashMap<u64, T> {
 }
 
 /// The topic the drone's controller takes its tension from.
-pub fn controller_tension_topic(_cfg: &Config) -> &'static str {
-    names::TENSION
+pub fn controller_tension_topic(cfg: &Config) -> &'static str {
+    controller::shell::tension_topic(cfg.controller.tension_source)
 }
 
 /// The drone's config as attached to the recording.

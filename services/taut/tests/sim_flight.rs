@@ -135,6 +135,56 @@ fn check_recording(out: &Path) {
     assert!(truth.len() > 1000, "{} truth samples", truth.len());
 }
 
+/// `taut replay` runs each drone's controller library again on the recorded inputs: every
+/// recorded attitude setpoint must come out bit for bit.
+fn check_replay(out: &Path) {
+    let output = Command::new(TAUT)
+        .arg("replay")
+        .arg(out.join("recording.mcap"))
+        .output()
+        .expect("start taut replay");
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    eprintln!(
+        "--- taut replay\n{stdout}{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    assert!(output.status.success(), "replay differs: {stdout}");
+    for uav in ["uav1", "uav2"] {
+        let line = stdout
+            .lines()
+            .find(|l| l.starts_with(&format!("{uav}: ")))
+            .unwrap_or_else(|| panic!("no replay line for {uav}: {stdout}"));
+        assert!(
+            line.ends_with("setpoints replayed, all bit for bit"),
+            "{line}"
+        );
+        let n: u64 = line[uav.len() + 2..]
+            .split(' ')
+            .next()
+            .and_then(|n| n.parse().ok())
+            .unwrap_or(0);
+        assert!(n > 1000, "{line}");
+    }
+}
+
+/// `taut sim` wrote the report of its recording: every figure and the markdown.
+fn check_report(out: &Path) {
+    let dir = out.join("report");
+    for f in [
+        "report.md",
+        "positions_uav1.png",
+        "positions_uav2.png",
+        "forces_uav1.png",
+        "forces_uav2.png",
+        "payload.png",
+        "latency_uav1.png",
+        "latency_uav2.png",
+    ] {
+        let len = std::fs::metadata(dir.join(f)).map_or(0, |m| m.len());
+        assert!(len > 1000, "{}: {len} bytes", dir.join(f).display());
+    }
+}
+
 #[test]
 fn test_a_real_time_then_fast_agree() {
     let _one = ONE_FLIGHT_AT_A_TIME
@@ -144,6 +194,8 @@ fn test_a_real_time_then_fast_agree() {
     let (ok, rt) = fly(&["test-a", "--seed", "1"], &rt_out);
     check_test_a(ok, &rt);
     check_recording(&rt_out);
+    check_replay(&rt_out);
+    check_report(&rt_out);
     // Real-time latency was measured (tension sample to attitude setpoint, both drones).
     for span in ["uav1_tension_to_setpoint", "uav2_tension_to_setpoint"] {
         let p99 = f(&rt, &["latency_us", span, "p99"]);
@@ -153,6 +205,7 @@ fn test_a_real_time_then_fast_agree() {
     let fast_out = out_dir("a-fast");
     let (ok, fast) = fly(&["test-a", "--seed", "1", "--fast"], &fast_out);
     check_test_a(ok, &fast);
+    check_replay(&fast_out);
     assert!(
         f(&fast, &["sim_s"]) / f(&fast, &["wall_s"]) >= 100.0,
         "fast mode below 100x"
@@ -249,5 +302,6 @@ fn test_b_round_trip_in_real_time() {
     // which `success` and exit 0 already say; the last phase's end is the round trip's end.
     assert_eq!(s["success"], true);
     assert!(f(&s, &["sim_s"]) > phases[3]["start_s"][0].as_f64().unwrap() + 5.0);
+    check_report(&out);
     let _ = std::fs::remove_dir_all(&out);
 }

@@ -6,7 +6,8 @@
 //! at or before the sample) for the sensor and the estimator. The controller's T_d is the force
 //! the drone exerts on the cable, so it is negated.
 
-use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+pub use crate::sim::metrics::{quat, swing_deg};
+use nalgebra::{UnitQuaternion, Vector3};
 use recorder::Timed;
 use shared_types::{setpoint_flags, MissionPhase, PlantTruth, TensionSample};
 
@@ -72,10 +73,6 @@ impl AttitudeTrack {
         let i = self.t_ns.partition_point(|t| *t <= t_ns);
         self.q.get(i.saturating_sub(1)).copied()
     }
-}
-
-pub fn quat(wxyz: [f64; 4]) -> UnitQuaternion<f64> {
-    UnitQuaternion::from_quaternion(Quaternion::new(wxyz[0], wxyz[1], wxyz[2], wxyz[3]))
 }
 
 /// Three series, one per NED axis, from a vector per sample.
@@ -297,28 +294,6 @@ pub fn swing(f: &FlightData, anchor_frd_m: [f64; 3]) -> Series {
             .filter(|(_, a)| a.is_finite())
             .collect(),
     }
-}
-
-/// The pendulum angle of the payload about the line through the two cable anchors, degrees:
-/// the angle between the anchors-to-payload plane and the vertical plane through that line.
-/// The same computation as `sim::metrics` (private there; a test checks they agree).
-pub fn swing_deg(t: &PlantTruth, anchor_frd_m: [f64; 3]) -> f64 {
-    let anchor = |k: usize| {
-        let b = &t.drones[k].body;
-        Vector3::from(b.position_ned_m) + quat(b.attitude_wxyz) * Vector3::from(anchor_frd_m)
-    };
-    let (a1, a2) = (anchor(0), anchor(1));
-    let Some(u) = (a2 - a1).try_normalize(1e-6) else {
-        return f64::NAN;
-    };
-    let d = Vector3::from(t.payload.position_ned_m) - 0.5 * (a1 + a2);
-    let d_perp = d - d.dot(&u) * u;
-    let down = Vector3::z();
-    let v = down - down.dot(&u) * u;
-    let (Some(d_perp), Some(v)) = (d_perp.try_normalize(1e-9), v.try_normalize(1e-9)) else {
-        return f64::NAN;
-    };
-    d_perp.cross(&v).norm().atan2(d_perp.dot(&v)).to_degrees()
 }
 
 /// The mission phases of drone `d` as spans, the last one ending at `end_s`.

@@ -18,6 +18,7 @@
 //! a TensionSample every 2 ms (TENSION_TRUTH), and each controller takes the source and law of
 //! its config (`taut sim --law / --tension-source`).
 
+use super::fast_record::{FastRecording, FastTopic};
 use super::force_metrics::ForceSource;
 use super::metrics::MetricsRecorder;
 use super::summary::Summary;
@@ -66,7 +67,6 @@ struct FastDrone {
     plant_link: LinkConfig,
     frame_period_ns: u64,
     next_frame_ns: u64,
-    raw_sequence: u64,
     last_codes: [i16; 4],
     newest_tension: Option<TensionSample>,
     estimator: ForceEstimator,
@@ -112,7 +112,6 @@ impl FastDrone {
             plant_link,
             frame_period_ns: (1e9 / cfg.sensor.rate_hz).round() as u64,
             next_frame_ns: 0,
-            raw_sequence: 0,
             last_codes: [0; 4],
             newest_tension: None,
             estimator,
@@ -137,7 +136,7 @@ impl FastDrone {
     }
 
     /// Reads the four chips at `t_ns` like one sampler frame, and runs the tension stage.
-    fn sample_sensor(&mut self, t_ns: u64) {
+    fn sample_sensor(&mut self, k: usize, t_ns: u64, out: &mut FastRecording) {
         let addresses = self.cfg.sensor.addresses;
         let mut frame = RawAdcFrame {
             mode: SamplingMode::Continuous,
@@ -165,17 +164,21 @@ impl FastDrone {
             // The code integrates the conversion that just ended: its middle is half a period back.
             frame.conversion_ns[c] = t_ns.saturating_sub(self.frame_period_ns / 2);
         }
-        frame.header.sequence = self.raw_sequence;
         frame.header.t_origin_ns = t_ns.saturating_sub(self.frame_period_ns / 2);
-        frame.header.t_publish_ns = t_ns;
-        self.raw_sequence += 1;
+        out.publish(k, FastTopic::RawAdc, t_ns, &mut frame);
         let mut s = self.tension.process(&frame);
-        s.header.t_publish_ns = t_ns;
+        out.publish(k, FastTopic::Tension, t_ns, &mut s);
         self.newest_tension = Some(s);
     }
 
     /// A message from the emulated PX4 to the bridge.
-    fn deliver_to_bridge(&mut self, t_ns: u64, msg: &MavMessage) {
+    fn deliver_to_bridge(
+        &mut self,
+        k: usize,
+        t_ns: u64,
+        msg: &MavMessage,
+        out: &mut FastRecording,
+    ) {
         let header = MavHeader {
             system_id: u32::from(self.plant_link.system_id),
             component_id: self.plant_link.component_id,
@@ -183,17 +186,21 @@ impl FastDrone {
         };
         match self.link.on_message(t_ns, &header, msg) {
             Some(Telemetry::State(mut s)) => {
-                s.header.t_publish_ns = t_ns;
+                out.publish(k, FastTopic::VehicleState, t_ns, &mut s);
                 self.newest_state = Some(s);
                 self.state_pending = true;
             }
-            Some(Telemetry::Imu(s)) => {
+            Some(Telemetry::Imu(mut s)) => {
+                out.publish(k, FastTopic::Imu, t_ns, &mut s);
                 let mut e = self.estimator.on_imu(&s);
-                e.header.t_publish_ns = t_ns;
+                out.publish(k, FastTopic::TensionEstimate, t_ns, &mut e);
                 self.newest_estimate = Some(e);
                 self.estimate_pending = true;
             }
-            Some(Telemetry::Motors(m)) => self.estimator.on_motor_speeds(&m),
+            Some(Telemetry::Motors(mut m)) => {
+                out.publish(k, FastTopic::MotorSpeeds, t_ns, &mut m);
+                self.estimator.on_motor_speeds(&m);
+            }
             None => {}
         }
     }
@@ -208,7 +215,12 @@ impl FastDrone {
     }
 }
 
-pub fn run(args: &SimArgs, scenario: &Scenario) -> Result<Summary, String> {
+/// Flies `scenario` in simulated time; with `recording`, writes every sample there (MCAP).
+pub fn run(
+    args: &SimArgs,
+    scenario: &Scenario,
+    recording: Option<&std::path::Path>,
+) -> Result<Summary, String> {
     let plant_cfg = PlantConfig {
         seed: args.seed,
         perturbation_enabled: !args.no_noise,
@@ -221,6 +233,7 @@ pub fn run(args: &SimArgs, scenario: &Scenario) -> Result<Summary, String> {
         zenoh: [7447, 7448],
     };
     let mut drones = Vec::new();
+    let mut texts = Vec::new();
     for k in 0..2 {
         let mut cfg = super::setup::drone_config(
             &args.scenario,
@@ -231,8 +244,21 @@ pub fn run(args: &SimArgs, scenario: &Scenario) -> Result<Summary, String> {
             &ports,
         );
         super::BaselineOverrides::of(args).apply(&mut cfg);
+        // Fly the config as its TOML reads back: the recording attaches that text, and a
+        // replay rebuilds the controller from it.
+        let text = cfg.to_toml();
+        let cfg = Config::from_toml_str(&text, &cfg.uav).map_err(|e| e.to_string())?;
+        texts.push(text);
         drones.push(FastDrone::new(cfg, scenario, k, args.seed)?);
     }
+    let mut out = match recording {
+        Some(path) => {
+            let uavs = [drones[0].cfg.uav.as_str(), drones[1].cfg.uav.as_str()];
+            FastRecording::create(path, &uavs, &texts)
+                .map_err(|e| format!("{}: {e}", path.display()))?
+        }
+        None => FastRecording::stamp_only(drones.len()),
+    };
     let mut rec = new_recorder(scenario);
     let mut outcome = Outcome::default();
     let limit_ns = (args.time_limit_s(scenario) * 1e9) as u64;
@@ -250,15 +276,17 @@ pub fn run(args: &SimArgs, scenario: &Scenario) -> Result<Summary, String> {
         fly_companions(
             &mut plant,
             &mut drones,
-            &mut rec,
+            (&mut rec, &mut out),
             t,
             (&mut next_hold_ns, &mut next_truth_tension_ns),
             &mut trace,
+            args.quiet,
         );
         if t >= next_truth_ns {
             next_truth_ns += TRUTH_PERIOD_NS;
             let mut truth = plant.truth();
             truth.header.t_origin_ns = t;
+            out.publish_truth(t, &mut truth);
             rec.on_truth(&truth);
             outcome.sim_s = t as f64 * 1e-9;
             outcome.observe_truth(&truth);
@@ -276,6 +304,9 @@ pub fn run(args: &SimArgs, scenario: &Scenario) -> Result<Summary, String> {
     if outcome.failure.is_none() && outcome.done_at_s.is_none() {
         outcome.fail(format!("no end after {:.0} s", limit_ns as f64 * 1e-9));
     }
+    if let Err(e) = out.finish() {
+        outcome.fail(format!("recording: {e}"));
+    }
     Ok(outcome.summary(args, scenario, "fast", &rec, wall.elapsed().as_secs_f64()))
 }
 
@@ -283,10 +314,11 @@ pub fn run(args: &SimArgs, scenario: &Scenario) -> Result<Summary, String> {
 fn fly_companions(
     plant: &mut Plant,
     drones: &mut [FastDrone],
-    rec: &mut MetricsRecorder,
+    (rec, out): (&mut MetricsRecorder, &mut FastRecording),
     t: u64,
     (next_hold_ns, next_truth_tension_ns): (&mut u64, &mut u64),
     trace: &mut Option<Trace>,
+    quiet: bool,
 ) {
     let drive_sensor = t >= *next_hold_ns;
     if drive_sensor {
@@ -303,13 +335,14 @@ fn fly_companions(
                 .set_profile(LoadProfile::Constant(plant.anchor_force_frd(k)), 0);
         }
         if publish_truth {
-            let s = crate::plant_cmd::truth_tension(plant, k, t);
+            let mut s = crate::plant_cmd::truth_tension(plant, k, t);
+            out.publish(k, FastTopic::TensionTruth, t, &mut s);
             rec.on_force_truth(k, &s);
             d.newest_truth_tension = Some(s);
         }
         if t >= d.next_frame_ns {
             d.next_frame_ns += d.frame_period_ns;
-            d.sample_sensor(t);
+            d.sample_sensor(k, t, out);
             if let Some(s) = &d.newest_tension {
                 rec.on_force_sample(k, ForceSource::Sensor, s);
             }
@@ -322,7 +355,7 @@ fn fly_companions(
                     Stream::Heartbeat => outbound::heartbeat(&tel),
                     s => outbound::stream_message(s, &tel),
                 };
-                d.deliver_to_bridge(t, &msg);
+                d.deliver_to_bridge(k, t, &msg, out);
             }
         }
         // The bridge's own traffic: heartbeats, the handshake, message intervals.
@@ -330,7 +363,7 @@ fn fly_companions(
             .poll(t, &mut |m: &MavMessage| d.outbox.push(m.clone()));
         let mut outbox = std::mem::take(&mut d.outbox);
         for m in outbox.drain(..) {
-            d.deliver_to_plant(plant, k, t, &m);
+            d.deliver_to_plant(plant, k, t, &m, out);
         }
         // Keep the buffer's capacity for the next tick.
         d.outbox = outbox;
@@ -349,16 +382,16 @@ fn fly_companions(
         drones[k].next_mission_ns += drones[k].mission_period_ns;
         let peer_signal = drones[1 - k].last_signal;
         let d = &mut drones[k];
-        let out = d.mission.step(
+        let step = d.mission.step(
             t,
             d.newest_state.as_ref(),
             peer_signal.as_ref().map(|s| (s, t)),
         );
-        let mut sp = out.setpoint;
-        sp.header.t_publish_ns = t;
+        let mut sp = step.setpoint;
+        out.publish(k, FastTopic::MissionSetpoint, t, &mut sp);
         d.newest_mission = Some(sp);
-        d.last_signal = Some(out.signal);
-        if let Some((i, name, ts)) = rec.on_mission(k, &sp) {
+        d.last_signal = Some(step.signal);
+        if let Some((i, name, ts)) = rec.on_mission(k, &sp).filter(|_| !quiet) {
             println!(
                 "[sim] drone {} phase {i} {name} started at {ts:.2} s",
                 k + 1
@@ -384,13 +417,13 @@ fn fly_companions(
         let mut sp: AttitudeSetpoint =
             d.controller
                 .step(t, &state, tension.as_ref(), d.newest_mission.as_ref());
-        sp.header.t_publish_ns = t;
+        out.publish(k, FastTopic::AttitudeSetpoint, t, &mut sp);
         rec.on_setpoint(k, &sp, false);
         if let Some(tr) = trace.as_mut() {
             tr.row(t, k, &state, &sp, &plant.truth());
         }
         if let Some(msg) = d.link.on_setpoint(t, &sp) {
-            d.deliver_to_plant(plant, k, t, &msg);
+            d.deliver_to_plant(plant, k, t, &msg, out);
         }
     }
 }

@@ -2,7 +2,7 @@
 //! message from the bridge (attitude targets, heartbeats, commands; SET_MESSAGE_INTERVAL is
 //! answered by the link layer, as on the wire).
 
-use super::{FastDrone, MAV_CMD_SET_MESSAGE_INTERVAL};
+use super::{FastDrone, FastRecording, MAV_CMD_SET_MESSAGE_INTERVAL};
 use px4_bridge::mavlink::dialects::common::{MavMessage, MavResult, COMMAND_ACK_DATA};
 use sim_plant::mavlink_link::inbound::{attitude_target, CommandLong};
 use sim_plant::mavlink_link::{IntervalRequest, Stream};
@@ -16,6 +16,7 @@ impl FastDrone {
         k: usize,
         t_ns: u64,
         msg: &MavMessage,
+        out: &mut FastRecording,
     ) {
         let (sys, comp) = (self.plant_link.system_id, self.plant_link.component_id);
         match msg {
@@ -69,7 +70,7 @@ impl FastDrone {
                     target_system: self.cfg.px4.system_id,
                     target_component: self.cfg.px4.component_id,
                 });
-                self.deliver_to_bridge(t_ns, &ack);
+                self.deliver_to_bridge(k, t_ns, &ack, out);
             }
             _ => {}
         }

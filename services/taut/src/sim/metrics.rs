@@ -20,8 +20,9 @@
 //!   So `swing_rms_deg` is the swing RMS after the drop (lift-off) in Test A.
 //! - Force sources against the truth (`force_rmse`): see [`super::force_metrics`].
 
+pub use super::swing::{quat, swing_deg};
 use latency_tests::{Percentiles, SpanHistograms};
-use nalgebra::{UnitQuaternion, Vector3};
+use nalgebra::Vector3;
 use serde::Serialize;
 use shared_types::{
     AttitudeSetpoint, ContactKind, MissionPhase, MissionSetpoint, PlantTruth, TensionSample,
@@ -288,22 +289,7 @@ impl MetricsRecorder {
     }
 
     fn swing_deg(&self, t: &PlantTruth) -> f64 {
-        let anchor = |k: usize| {
-            let b = &t.drones[k].body;
-            Vector3::from(b.position_ned_m) + quat(b.attitude_wxyz) * self.anchor_frd_m
-        };
-        let (a1, a2) = (anchor(0), anchor(1));
-        let Some(u) = (a2 - a1).try_normalize(1e-6) else {
-            return f64::NAN;
-        };
-        let d = Vector3::from(t.payload.position_ned_m) - 0.5 * (a1 + a2);
-        let d_perp = d - d.dot(&u) * u;
-        let down = Vector3::z();
-        let v = down - down.dot(&u) * u;
-        let (Some(d_perp), Some(v)) = (d_perp.try_normalize(1e-9), v.try_normalize(1e-9)) else {
-            return f64::NAN;
-        };
-        d_perp.cross(&v).norm().atan2(d_perp.dot(&v)).to_degrees()
+        swing_deg(t, self.anchor_frd_m.into())
     }
 
     /// Start of the first Move phase by either drone, s.
@@ -404,12 +390,6 @@ impl MetricsRecorder {
             crashed: truth.drones.iter().any(|d| d.crash_flags != 0),
         }
     }
-}
-
-fn quat(wxyz: [f64; 4]) -> UnitQuaternion<f64> {
-    UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
-        wxyz[0], wxyz[1], wxyz[2], wxyz[3],
-    ))
 }
 
 #[cfg(test)]

@@ -5,11 +5,13 @@
 //! a dead service.
 
 pub mod fast;
+mod fast_record;
 pub mod force_metrics;
 pub mod metrics;
 mod realtime;
 mod setup;
 pub mod summary;
+mod swing;
 mod trace;
 
 use clap::Args;
@@ -43,6 +45,12 @@ pub struct SimArgs {
     /// What wakes the controller (default: the embedded config's, `odometry`).
     #[arg(long, value_enum)]
     pub controller_trigger: Option<Trigger>,
+    /// Fast mode: do not write `<out>/recording.mcap` (nor the report).
+    #[arg(long)]
+    pub no_recording: bool,
+    /// Print only the summary (fast mode: no per-phase lines).
+    #[arg(long)]
+    pub quiet: bool,
     /// Fast mode: write every controller step of both drones to this CSV (for plots).
     #[arg(long)]
     pub trace: Option<PathBuf>,
@@ -103,20 +111,6 @@ impl BaselineOverrides {
     }
 }
 
-/// The overrides of this process's `taut sim`, read by `setup::drone_config` (the real-time
-/// run builds its configs there; one `taut sim` per process).
-static OVERRIDES: std::sync::Mutex<BaselineOverrides> = std::sync::Mutex::new(BaselineOverrides {
-    law: None,
-    tension_source: None,
-});
-
-/// Applies this process's `--law` / `--tension-source` to `cfg`.
-pub(crate) fn apply_overrides(cfg: &mut rt_config::Config) {
-    if let Ok(o) = OVERRIDES.lock() {
-        o.apply(cfg);
-    }
-}
-
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum Trigger {
     Odometry,
@@ -131,38 +125,7 @@ impl SimArgs {
 }
 
 pub fn run(args: &SimArgs) -> Result<(), String> {
-    let scenario = Scenario::load(&args.scenario).map_err(|e| e.to_string())?;
-    let out = args.out.clone().unwrap_or_else(|| {
-        PathBuf::from("sim-out").join(format!("{}-seed{}", scenario.name, args.seed))
-    });
-    std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
-    if let Ok(mut o) = OVERRIDES.lock() {
-        *o = BaselineOverrides::of(args);
-    }
-    taut_ipc::install_stop_handler();
-    println!(
-        "[sim] {} seed {} ({}), noise {}, law {}, tension source {}, output in {}",
-        scenario.name,
-        args.seed,
-        if args.fast { "fast" } else { "real time" },
-        if args.no_noise { "off" } else { "on" },
-        args.law.map_or("from config", |l| match l {
-            Law::Proposed => "proposed",
-            Law::Geometric => "geometric",
-        }),
-        args.tension_source.map_or("from config", |s| match s {
-            Source::Sensor => "sensor",
-            Source::Estimator => "estimator",
-            Source::Truth => "truth",
-        }),
-        out.display()
-    );
-    let summary = if args.fast {
-        fast::run(args, &scenario)?
-    } else {
-        realtime::run(args, &scenario, &out)?
-    };
-    summary.write(&out)?;
+    let (summary, out) = fly(args)?;
     print!("{summary}");
     println!("[sim] wrote {}", out.join("summary.json").display());
     write_report_if_recorded(&out);
@@ -170,6 +133,45 @@ pub fn run(args: &SimArgs) -> Result<(), String> {
         None => Ok(()),
         Some(why) => Err(format!("the flight failed: {why}")),
     }
+}
+
+/// Flies `args`, writes `<out>/summary.json` (and the recording unless `--no-recording`),
+/// returns the summary whatever the verdict, and the output folder. `Err` only if the flight
+/// could not be flown at all.
+pub fn fly(args: &SimArgs) -> Result<(Summary, PathBuf), String> {
+    let scenario = Scenario::load(&args.scenario).map_err(|e| e.to_string())?;
+    let out = args.out.clone().unwrap_or_else(|| {
+        PathBuf::from("sim-out").join(format!("{}-seed{}", scenario.name, args.seed))
+    });
+    std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
+    taut_ipc::install_stop_handler();
+    if !args.quiet {
+        println!(
+            "[sim] {} seed {} ({}), noise {}, law {}, tension source {}, output in {}",
+            scenario.name,
+            args.seed,
+            if args.fast { "fast" } else { "real time" },
+            if args.no_noise { "off" } else { "on" },
+            args.law.map_or("from config", |l| match l {
+                Law::Proposed => "proposed",
+                Law::Geometric => "geometric",
+            }),
+            args.tension_source.map_or("from config", |s| match s {
+                Source::Sensor => "sensor",
+                Source::Estimator => "estimator",
+                Source::Truth => "truth",
+            }),
+            out.display()
+        );
+    }
+    let recording = out.join("recording.mcap");
+    let summary = if args.fast {
+        fast::run(args, &scenario, (!args.no_recording).then_some(&*recording))?
+    } else {
+        realtime::run(args, &scenario, &out)?
+    };
+    summary.write(&out)?;
+    Ok((summary, out))
 }
 
 /// The report of `<out>/recording.mcap` into `<out>/report/`, if recorded; a failure is

@@ -88,8 +88,6 @@ pub fn drone_config(
     cfg.mission.connect = vec![format!("tcp/127.0.0.1:{}", ports.zenoh[1 - k])];
     // A simulated flight is judged as a whole: a dying service ends it.
     cfg.supervisor.on_death = OnDeath::StopAll;
-    // `taut sim --law / --tension-source`.
-    super::apply_overrides(&mut cfg);
     cfg
 }
 

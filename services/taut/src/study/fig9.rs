@@ -8,7 +8,7 @@ use std::path::Path;
 
 use plotters::prelude::*;
 use recorder::{Recording, Timed};
-use shared_types::{names, MissionPhase, MissionSetpoint, TensionSample};
+use shared_types::{names, tension_flags, MissionPhase, MissionSetpoint, TensionSample};
 
 /// One column: a flight and the topic of the force its controller used.
 pub struct Column<'a> {
@@ -19,9 +19,12 @@ pub struct Column<'a> {
 
 type Series = Vec<(f64, f64)>;
 
+/// One axis over time; samples still warming their filter up (flagged so by their stage:
+/// the sensor's first frames, the estimator's first IMU samples) are left out.
 fn series(samples: &[Timed<TensionSample>], t0: u64, axis: usize) -> Series {
     samples
         .iter()
+        .filter(|s| s.sample.flags & tension_flags::FILTER_WARMUP == 0)
         .map(|s| {
             (
                 s.log_time_ns.saturating_sub(t0) as f64 * 1e-9,
@@ -71,10 +74,7 @@ pub fn draw(path: &Path, uavs: &[String], columns: &[Column]) -> Result<(), Stri
                 .recording
                 .samples(uav, names::TENSION_TRUTH)
                 .map_err(|e| err(e.to_string()))?;
-            let t0 = truth
-                .first()
-                .or(used.first())
-                .map_or(0, |s| s.log_time_ns);
+            let t0 = truth.first().or(used.first()).map_or(0, |s| s.log_time_ns);
             let spans = phase_spans(col.recording, &uavs[0], t0);
             for (axis, name) in ["x", "y", "z"].iter().enumerate() {
                 let area = &cells[(ui * 3 + axis) * columns.len() + ci];
@@ -141,7 +141,10 @@ fn draw_panel<DB: DrawingBackend>(
             .map_err(|x| e(&x))?;
     }
     chart
-        .draw_series(LineSeries::new(truth.iter().copied(), BLACK.stroke_width(2)))
+        .draw_series(LineSeries::new(
+            truth.iter().copied(),
+            BLACK.stroke_width(2),
+        ))
         .map_err(|x| e(&x))?
         .label("truth")
         .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 15, y)], BLACK));

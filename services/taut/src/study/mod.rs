@@ -35,7 +35,14 @@ pub const LAWS: [&str; 2] = ["proposed", "geometric"];
 pub const SOURCES: [&str; 3] = ["sensor", "estimator", "truth"];
 
 /// `taut sim`'s arguments for one study flight.
-fn sim_args(scenario: &str, law: &str, source: &str, seed: u64, out: &Path) -> SimArgs {
+fn sim_args(
+    scenario: &str,
+    law: &str,
+    source: &str,
+    seed: u64,
+    out: &Path,
+    record: bool,
+) -> SimArgs {
     #[derive(Parser)]
     struct Wrap {
         #[command(flatten)]
@@ -55,7 +62,12 @@ fn sim_args(scenario: &str, law: &str, source: &str, seed: u64, out: &Path) -> S
         source,
         "--out",
         &out,
+        "--quiet",
     ];
+    let mut argv = argv.to_vec();
+    if !record {
+        argv.push("--no-recording");
+    }
     Wrap::try_parse_from(argv)
         .expect("the study's sim arguments are valid")
         .sim
@@ -97,7 +109,12 @@ pub fn run_metrics(law: &str, source: &str, seed: u64, s: &Summary) -> RunMetric
         settling_s: m.payload.settling_time_s,
         z_steady_state_m: mean(&|d| d.z_steady_state_error_m.map(f64::abs)),
         position_rmse_m: mean(&|d| d.position_rmse_m),
-        force_rmse_n: mean(&|d| d.used_force_rmse_n),
+        force_rmse_n: match source {
+            "sensor" => mean(&|d| d.force_rmse.sensor_frd_n.as_ref().map(|e| e.norm)),
+            "estimator" => mean(&|d| d.force_rmse.estimator_frd_n.as_ref().map(|e| e.norm)),
+            _ => Some(0.0),
+        },
+        used_force_rmse_n: mean(&|d| d.force_rmse.used_ned_n.as_ref().map(|e| e.norm)),
         max_cable_force_n: Some(m.max_cable_force_n),
         crashed: m.crashed,
         completed: s.success,
@@ -122,8 +139,11 @@ pub fn run(args: &StudyArgs) -> Result<(), String> {
                 let what = format!("{law} / {source} / seed {seed}");
                 progress.show(&what);
                 let dir = run_dir(&args.out, law, source, seed);
-                let summary = sim::fly(&sim_args(&args.scenario, law, source, seed, &dir))
-                    .map_err(|e| format!("{what}: {e}"))?;
+                // Fig. 9 needs the proposed law's seed-1 flights; the others keep their summary.
+                let record = law == "proposed" && seed == 1;
+                let (summary, _) =
+                    sim::fly(&sim_args(&args.scenario, law, source, seed, &dir, record))
+                        .map_err(|e| format!("{what}: {e}"))?;
                 runs.push(run_metrics(law, source, seed, &summary));
                 progress.done += 1;
             }

@@ -18,9 +18,12 @@ pub struct RunMetrics {
     pub z_steady_state_m: Option<f64>,
     /// Mean over the drones of the position RMSE against the nominal setpoint, m.
     pub position_rmse_m: Option<f64>,
-    /// Mean over the drones of the RMSE of the force the controller used against the true
-    /// anchor force, N (0 for the truth source).
+    /// Mean over the drones of the RMSE (norm) of the tension source's raw force against the
+    /// true anchor force, N (sensor or estimator, body FRD; 0 for the truth source).
     pub force_rmse_n: Option<f64>,
+    /// The same for the low-pass filtered force the controller acted on (NED), N: includes
+    /// the filter's lag, so not 0 for the truth source.
+    pub used_force_rmse_n: Option<f64>,
     /// Largest cable force, N.
     pub max_cable_force_n: Option<f64>,
     pub crashed: bool,
@@ -65,7 +68,7 @@ struct Column {
     get: fn(&RunMetrics) -> Option<f64>,
 }
 
-const COLUMNS: [Column; 6] = [
+const COLUMNS: [Column; 7] = [
     Column {
         title: "swing RMS after drop (deg)",
         csv: "swing_rms_deg",
@@ -91,10 +94,16 @@ const COLUMNS: [Column; 6] = [
         get: |r| r.position_rmse_m,
     },
     Column {
-        title: "force RMSE vs truth (N)",
+        title: "source force RMSE vs truth (N)",
         csv: "force_rmse_n",
         decimals: 2,
         get: |r| r.force_rmse_n,
+    },
+    Column {
+        title: "filtered force used vs truth (N)",
+        csv: "used_force_rmse_n",
+        decimals: 2,
+        get: |r| r.used_force_rmse_n,
     },
     Column {
         title: "max cable force (N)",
