@@ -74,7 +74,16 @@ fn handshake_with_retries_setpoints_telemetry_garbage_and_link_loss() {
         .iter()
         .map(|c| (c.1[0], c.1[1]))
         .collect();
-    let rates = [(331.0, 1e4), (31.0, 1e4), (105.0, 4e3), (291.0, 2e4)];
+    // Intervals (µs, as MAVLink's f32 param) of the embedded config's rates: ODOMETRY,
+    // ATTITUDE_QUATERNION, HIGHRES_IMU, ESC_STATUS.
+    let px4 = rt_config::Config::embedded_sim().px4;
+    let us = |hz: f64| (1e6 / hz) as f32 as f64;
+    let rates = [
+        (331.0, us(px4.odometry_hz)),
+        (31.0, us(px4.attitude_hz)),
+        (105.0, us(px4.imu_hz)),
+        (291.0, us(px4.esc_hz)),
+    ];
     assert_eq!(got, [rates, rates].concat());
 
     // Handshake: >= 1.2 s of stream, DO_SET_MODE 1/6/0 resent after the ignored first one,

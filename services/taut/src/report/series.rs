@@ -9,7 +9,9 @@
 pub use crate::sim::metrics::{quat, swing_deg};
 use nalgebra::{UnitQuaternion, Vector3};
 use recorder::Timed;
-use shared_types::{setpoint_flags, MissionPhase, PlantTruth, TensionSample};
+use shared_types::{
+    setpoint_flags, tension_flags, ContactKind, MissionPhase, PlantTruth, TensionSample,
+};
 
 use super::load::{sample_time_ns, DroneData, FlightData};
 
@@ -157,7 +159,9 @@ pub fn positions(f: &FlightData, d: &DroneData) -> [Vec<Series>; 3] {
     out
 }
 
-/// Body-FRD tension samples rotated into NED with `track` (pull on the drone).
+/// Body-FRD tension samples rotated into NED with `track` (pull on the drone). Samples still
+/// warming their stage's filter up (FILTER_WARMUP: the sensor's first frames read the chips
+/// before their first conversion) are left out: they are not forces.
 fn rotated(
     f: &FlightData,
     samples: &[Timed<TensionSample>],
@@ -165,7 +169,10 @@ fn rotated(
     source: Source,
     label: &str,
 ) -> [Series; 3] {
-    per_axis(f, samples.iter(), source, label, |s| {
+    let settled = samples
+        .iter()
+        .filter(|s| s.sample.flags & tension_flags::FILTER_WARMUP == 0);
+    per_axis(f, settled, source, label, |s| {
         let t = sample_time_ns(s);
         let q = track.at(t)?;
         Some((t, (q * Vector3::from(s.sample.force_body_n)).into()))
@@ -277,7 +284,8 @@ pub fn payload_position(f: &FlightData) -> [Vec<Series>; 3] {
     out
 }
 
-/// The payload's swing angle over time, degrees (see [`swing_deg`]).
+/// The payload's swing angle over time, degrees (see [`swing_deg`]), while it hangs free: on
+/// its box or the ground the drones may be beside or below it and the angle means nothing.
 pub fn swing(f: &FlightData, anchor_frd_m: [f64; 3]) -> Series {
     Series {
         source: Source::Truth,
@@ -285,6 +293,7 @@ pub fn swing(f: &FlightData, anchor_frd_m: [f64; 3]) -> Series {
         points: f
             .truth
             .iter()
+            .filter(|s| s.sample.payload_contact == ContactKind::Free)
             .map(|s| {
                 (
                     f.secs(sample_time_ns(s)),
