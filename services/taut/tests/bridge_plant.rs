@@ -98,7 +98,12 @@ fn bridge_arms_the_emulated_px4_in_offboard() {
     ] {
         assert_eq!(counter(&log, key), 0, "{key}: {log}");
     }
-    assert_eq!(counter(&log, "intervals_accepted"), 4);
+    // Four stream rates, asked again after each link loss (a heartbeat more than 1.5 s late;
+    // seen in 2 of ~25 runs on this loaded 2-core machine since the sim streams HIGHRES_IMU at
+    // 900 Hz, with no UDP receive drops): the bridge must recover from it, not avoid it.
+    let losses = counter(&log, "link_losses");
+    assert!(losses <= 1, "{losses} link losses: {log}");
+    assert_eq!(counter(&log, "intervals_accepted"), 4 * (1 + losses));
     assert_eq!(counter(&log, "foreign_messages"), 0);
 
     // Rates over the last 0.8 s: ODOMETRY 100 Hz, HIGHRES_IMU 250 Hz, ESC_STATUS 50 Hz.
