@@ -23,7 +23,7 @@
 use schemars::JsonSchema;
 use serde::{de::DeserializeOwned, Serialize};
 use shared_types::{
-    AttitudeSetpoint, ImuSample, MissionSetpoint, MotorSpeeds, PlantTruth, RawAdcFrame,
+    names, AttitudeSetpoint, ImuSample, MissionSetpoint, MotorSpeeds, PlantTruth, RawAdcFrame,
     TensionSample, VehicleState,
 };
 use taut_ipc::Stamped;
@@ -79,6 +79,39 @@ recordable!(
     AttitudeSetpoint,
 );
 
+/// Every per-drone topic a recording holds, in channel order (see [`visit_drone_topics`]).
+pub const DRONE_TOPICS: [&str; 9] = [
+    names::RAW_ADC,
+    names::TENSION,
+    names::TENSION_ESTIMATE,
+    names::TENSION_TRUTH,
+    names::VEHICLE_STATE,
+    names::IMU,
+    names::MOTOR_SPEEDS,
+    names::MISSION_SETPOINT,
+    names::ATTITUDE_SETPOINT,
+];
+
+/// Something done once per drone topic with its sample type (subscribe to it, add its
+/// channel): the one place that pairs each topic with its type.
+pub trait DroneTopicVisitor {
+    type Error;
+    fn visit<T: Recordable>(&mut self, topic: &'static str) -> Result<(), Self::Error>;
+}
+
+/// Visits every topic of [`DRONE_TOPICS`], in that order, with its sample type.
+pub fn visit_drone_topics<V: DroneTopicVisitor>(v: &mut V) -> Result<(), V::Error> {
+    v.visit::<RawAdcFrame>(names::RAW_ADC)?;
+    v.visit::<TensionSample>(names::TENSION)?;
+    v.visit::<TensionSample>(names::TENSION_ESTIMATE)?;
+    v.visit::<TensionSample>(names::TENSION_TRUTH)?;
+    v.visit::<VehicleState>(names::VEHICLE_STATE)?;
+    v.visit::<ImuSample>(names::IMU)?;
+    v.visit::<MotorSpeeds>(names::MOTOR_SPEEDS)?;
+    v.visit::<MissionSetpoint>(names::MISSION_SETPOINT)?;
+    v.visit::<AttitudeSetpoint>(names::ATTITUDE_SETPOINT)
+}
+
 /// `taut.<Type>`.
 pub fn schema_name<T: Recordable>() -> String {
     format!("taut.{}", T::TYPE_NAME)
@@ -113,6 +146,24 @@ mod tests {
         assert_eq!(v["title"], "taut.AttitudeSetpoint");
         assert!(v["properties"]["step_ns"].is_object(), "{v}");
         assert_eq!(channel_topic("uav1", "tension"), "/uav1/tension");
+    }
+
+    #[test]
+    fn the_visitor_walks_drone_topics_in_order() {
+        struct Names(Vec<(&'static str, &'static str)>);
+        impl DroneTopicVisitor for Names {
+            type Error = ();
+            fn visit<T: Recordable>(&mut self, topic: &'static str) -> Result<(), ()> {
+                self.0.push((topic, T::TYPE_NAME));
+                Ok(())
+            }
+        }
+        let mut v = Names(Vec::new());
+        visit_drone_topics(&mut v).expect("visit");
+        let topics: Vec<&str> = v.0.iter().map(|p| p.0).collect();
+        assert_eq!(topics, DRONE_TOPICS);
+        assert_eq!(v.0[3], (names::TENSION_TRUTH, "TensionSample"));
+        assert_eq!(v.0[8], (names::ATTITUDE_SETPOINT, "AttitudeSetpoint"));
     }
 
     #[test]

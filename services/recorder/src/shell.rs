@@ -12,30 +12,14 @@ use std::time::Duration;
 
 use rt_config::periodic::now_ns;
 use rt_config::Config;
-use shared_types::{
-    names, AttitudeSetpoint, ImuSample, MissionSetpoint, MotorSpeeds, PlantTruth, RawAdcFrame,
-    TensionSample, VehicleState,
-};
+use shared_types::{names, PlantTruth};
 use taut_ipc::{stop_requested, Ipc, TopicSubscriber};
 
-use crate::format::Recordable;
+use crate::format::{visit_drone_topics, DroneTopicVisitor, Recordable};
 use crate::write::{ChannelHandle, ChannelStats, Mode, RecordingInfo, RecordingWriter};
 
 /// How long the loop sleeps when every buffer was empty.
 pub const POLL_PERIOD: Duration = Duration::from_millis(5);
-
-/// Every drone topic the recorder takes, with its sample type (see [`open_drone`]).
-pub const DRONE_TOPICS: [&str; 9] = [
-    names::RAW_ADC,
-    names::TENSION,
-    names::TENSION_ESTIMATE,
-    names::TENSION_TRUTH,
-    names::VEHICLE_STATE,
-    names::IMU,
-    names::MOTOR_SPEEDS,
-    names::MISSION_SETPOINT,
-    names::ATTITUDE_SETPOINT,
-];
 
 /// What to record and where.
 #[derive(Debug, Clone)]
@@ -96,6 +80,23 @@ impl<T: Recordable> Drain for Tap<T> {
     }
 }
 
+/// Subscribes to every drone topic of `uav` (see [`visit_drone_topics`]).
+struct DroneTaps<'a> {
+    ipc: &'a Ipc,
+    uav: &'a str,
+    buffer: usize,
+    taps: Vec<Box<dyn Drain>>,
+}
+
+impl DroneTopicVisitor for DroneTaps<'_> {
+    type Error = String;
+    fn visit<T: Recordable>(&mut self, topic: &'static str) -> Result<(), String> {
+        self.taps
+            .push(tap::<T>(self.ipc, self.uav, topic, self.buffer)?);
+        Ok(())
+    }
+}
+
 fn tap<T: Recordable>(
     ipc: &Ipc,
     uav: &str,
@@ -112,19 +113,15 @@ fn tap<T: Recordable>(
     }))
 }
 
-/// Subscribes to every topic of [`DRONE_TOPICS`] of `uav`.
 fn open_drone(ipc: &Ipc, uav: &str, buffer: usize) -> Result<Vec<Box<dyn Drain>>, String> {
-    Ok(vec![
-        tap::<RawAdcFrame>(ipc, uav, names::RAW_ADC, buffer)?,
-        tap::<TensionSample>(ipc, uav, names::TENSION, buffer)?,
-        tap::<TensionSample>(ipc, uav, names::TENSION_ESTIMATE, buffer)?,
-        tap::<TensionSample>(ipc, uav, names::TENSION_TRUTH, buffer)?,
-        tap::<VehicleState>(ipc, uav, names::VEHICLE_STATE, buffer)?,
-        tap::<ImuSample>(ipc, uav, names::IMU, buffer)?,
-        tap::<MotorSpeeds>(ipc, uav, names::MOTOR_SPEEDS, buffer)?,
-        tap::<MissionSetpoint>(ipc, uav, names::MISSION_SETPOINT, buffer)?,
-        tap::<AttitudeSetpoint>(ipc, uav, names::ATTITUDE_SETPOINT, buffer)?,
-    ])
+    let mut v = DroneTaps {
+        ipc,
+        uav,
+        buffer,
+        taps: Vec::new(),
+    };
+    visit_drone_topics(&mut v)?;
+    Ok(v.taps)
 }
 
 fn drain_all(taps: &mut [Box<dyn Drain>], w: &mut RecordingWriter) -> Result<usize, String> {

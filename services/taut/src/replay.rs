@@ -164,48 +164,48 @@ fn step_again(
     tensions: &HashMap<u64, TensionSample>,
     missions: &HashMap<u64, MissionSetpoint>,
 ) -> Result<AttitudeSetpoint, String> {
-    let given = recorded.given_inputs;
-    let lookup = |bit: u32, what: &str, seq: u64| -> Result<bool, String> {
-        if given & bit == 0 {
-            return Ok(false);
-        }
-        let present = match what {
-            "vehicle state" => states.contains_key(&seq),
-            "tension sample" => tensions.contains_key(&seq),
-            _ => missions.contains_key(&seq),
-        };
-        if present {
-            Ok(true)
-        } else {
-            Err(format!("input {what} {seq} is not in the recording"))
-        }
-    };
-    let state = if lookup(
-        given_inputs::ODOMETRY,
-        "vehicle state",
+    let bits = recorded.given_inputs;
+    let state = given(
+        bits & given_inputs::ODOMETRY != 0,
         recorded.odometry_sequence,
-    )? {
-        states[&recorded.odometry_sequence]
-    } else {
-        VehicleState::before_first_odometry()
-    };
-    let tension = lookup(
-        given_inputs::TENSION,
-        "tension sample",
+        states,
+        "vehicle state",
+    )?
+    .copied()
+    .unwrap_or_else(VehicleState::before_first_odometry);
+    let tension = given(
+        bits & given_inputs::TENSION != 0,
         recorded.given_tension_sequence,
-    )?
-    .then(|| &tensions[&recorded.given_tension_sequence]);
-    let mission = lookup(
-        given_inputs::MISSION,
-        "mission setpoint",
+        tensions,
+        "tension sample",
+    )?;
+    let mission = given(
+        bits & given_inputs::MISSION != 0,
         recorded.given_mission_sequence,
-    )?
-    .then(|| &missions[&recorded.given_mission_sequence]);
+        missions,
+        "mission setpoint",
+    )?;
     let mut out = stage.step(recorded.step_ns, &state, tension, mission);
     // Stamped by the publisher, not computed by the step.
     out.header.sequence = recorded.header.sequence;
     out.header.t_publish_ns = recorded.header.t_publish_ns;
     Ok(out)
+}
+
+/// The sample numbered `sequence` if the step was handed one; `Err` if it is not recorded.
+fn given<'a, T>(
+    handed: bool,
+    sequence: u64,
+    by_sequence: &'a HashMap<u64, T>,
+    what: &str,
+) -> Result<Option<&'a T>, String> {
+    if !handed {
+        return Ok(None);
+    }
+    by_sequence
+        .get(&sequence)
+        .map(Some)
+        .ok_or_else(|| format!("input {what} {sequence} is not in the recording"))
 }
 
 /// The first field whose JSON text differs, as `path: recorded X, replayed Y`.

@@ -14,8 +14,6 @@ use std::path::{Path, PathBuf};
 use super::ReportError;
 
 /// The 8 bytes every MCAP file starts with.
-const MCAP_MAGIC: [u8; 8] = *b"\x89MCAP0\r\n";
-
 /// One drone's channels.
 #[derive(Debug, Clone, Default)]
 pub struct DroneData {
@@ -55,22 +53,6 @@ pub struct FlightData {
 
 impl FlightData {
     pub fn open(path: &Path) -> Result<Self, ReportError> {
-        // The reader tolerates a torn end, and with it a file that never was MCAP: check the
-        // magic first.
-        let mut magic = [0u8; 8];
-        let head = std::fs::File::open(path).and_then(|mut f| {
-            use std::io::Read;
-            f.read_exact(&mut magic)
-        });
-        if head.is_err() || magic != MCAP_MAGIC {
-            return Err(ReportError::Read {
-                path: path.display().to_string(),
-                message: head.err().map_or_else(
-                    || "not an MCAP file (no MCAP magic at its start)".to_string(),
-                    |e| e.to_string(),
-                ),
-            });
-        }
         let rec = Recording::open(path).map_err(|e| ReportError::Read {
             path: path.display().to_string(),
             message: e.to_string(),

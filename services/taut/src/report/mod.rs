@@ -16,11 +16,11 @@
 mod flight_metrics;
 mod json_tables;
 mod latency;
-mod load;
+pub(crate) mod load;
 mod markdown;
-mod plot;
+pub(crate) mod plot;
 mod plot_latency;
-mod series;
+pub(crate) mod series;
 
 use clap::Args;
 use std::path::{Path, PathBuf};

@@ -116,21 +116,55 @@ pub fn draw_time_figure(
     t_end_s: f64,
     text: bool,
 ) -> Result<(), String> {
-    let size = (WIDTH, figure_height(panels.len()));
+    let column = Column {
+        panels,
+        phases,
+        t_end_s,
+    };
+    draw_time_grid(path, title, &[column], text)
+}
+
+/// One column of a grid figure: its stacked panels, their phases and time axis.
+pub struct Column<'a> {
+    pub panels: &'a [Panel],
+    pub phases: &'a [PhaseSpan],
+    pub t_end_s: f64,
+}
+
+/// Draws `columns` side by side (each as [`draw_time_figure`] draws one) into `path`,
+/// [`WIDTH`] per column.
+pub fn draw_time_grid(
+    path: &Path,
+    title: &str,
+    columns: &[Column],
+    text: bool,
+) -> Result<(), String> {
+    let rows = columns.iter().map(|c| c.panels.len()).max().unwrap_or(0);
+    let size = (WIDTH * columns.len().max(1) as u32, figure_height(rows));
     let root = BitMapBackend::new(path, size).into_drawing_area();
     root.fill(&WHITE).map_err(msg)?;
     let (head, body) = root.split_vertically(TITLE_HEIGHT);
     if text {
         head.titled(title, ("sans-serif", 28)).map_err(msg)?;
     }
-    let x_hi = if t_end_s > 0.0 { t_end_s } else { 1.0 };
-    for (i, (area, panel)) in body
-        .split_evenly((panels.len().max(1), 1))
+    for (area, column) in body
+        .split_evenly((1, columns.len().max(1)))
         .iter()
-        .zip(panels)
-        .enumerate()
+        .zip(columns)
     {
-        draw_panel(area, panel, phases, x_hi, text, i == 0)?;
+        let x_hi = if column.t_end_s > 0.0 {
+            column.t_end_s
+        } else {
+            1.0
+        };
+        for (i, (cell, panel)) in area
+            .split_evenly((rows.max(1), 1))
+            .iter()
+            .zip(column.panels)
+            .enumerate()
+        {
+            draw_panel(cell, panel, column.phases, x_hi, text, i == 0)?;
+        }
     }
     root.present().map_err(msg)
 }

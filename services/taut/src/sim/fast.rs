@@ -243,7 +243,7 @@ pub fn run(
             std::path::Path::new("/nonexistent"),
             &ports,
         );
-        super::BaselineOverrides::of(args).apply(&mut cfg);
+        super::apply_baselines(args, &mut cfg);
         // Fly the config as its TOML reads back: the recording attaches that text, and a
         // replay rebuilds the controller from it.
         let text = cfg.to_toml();

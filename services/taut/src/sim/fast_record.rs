@@ -8,11 +8,13 @@
 
 use std::path::Path;
 
+use recorder::format::{visit_drone_topics, DroneTopicVisitor, DRONE_TOPICS};
 use recorder::write::{Mode, RecordingInfo, RecordingWriter};
 use recorder::{ChannelHandle, Recordable};
 use shared_types::{names, PlantTruth};
 
-/// The per-drone topics fast mode produces, in channel order.
+/// The per-drone topics fast mode produces, in `recorder::format::DRONE_TOPICS` order (a
+/// test holds them together).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum FastTopic {
     RawAdc,
@@ -26,11 +28,30 @@ pub enum FastTopic {
     AttitudeSetpoint,
 }
 
-const TOPICS: usize = 9;
+const TOPICS: usize = DRONE_TOPICS.len();
 
 impl FastTopic {
     fn index(self) -> usize {
         self as usize
+    }
+}
+
+/// Adds one drone's channels, in `DRONE_TOPICS` order.
+struct DroneChannels<'a> {
+    writer: &'a mut RecordingWriter,
+    uav: &'a str,
+    handles: Vec<ChannelHandle>,
+}
+
+impl DroneTopicVisitor for DroneChannels<'_> {
+    type Error = String;
+    fn visit<T: Recordable>(&mut self, topic: &'static str) -> Result<(), String> {
+        let h = self
+            .writer
+            .add_channel::<T>(self.uav, topic)
+            .map_err(|e| e.to_string())?;
+        self.handles.push(h);
+        Ok(())
     }
 }
 
@@ -68,43 +89,17 @@ impl FastRecording {
         let mut channels = Vec::new();
         for (uav, cfg) in uavs.iter().zip(configs) {
             w.attach_config(uav, cfg).map_err(|e| e.to_string())?;
-            let e = |e: recorder::write::WriteError| e.to_string();
-            use shared_types::*;
-            channels.push([
-                Some(
-                    w.add_channel::<RawAdcFrame>(uav, names::RAW_ADC)
-                        .map_err(e)?,
-                ),
-                Some(
-                    w.add_channel::<TensionSample>(uav, names::TENSION)
-                        .map_err(e)?,
-                ),
-                Some(
-                    w.add_channel::<TensionSample>(uav, names::TENSION_ESTIMATE)
-                        .map_err(e)?,
-                ),
-                Some(
-                    w.add_channel::<TensionSample>(uav, names::TENSION_TRUTH)
-                        .map_err(e)?,
-                ),
-                Some(
-                    w.add_channel::<VehicleState>(uav, names::VEHICLE_STATE)
-                        .map_err(e)?,
-                ),
-                Some(w.add_channel::<ImuSample>(uav, names::IMU).map_err(e)?),
-                Some(
-                    w.add_channel::<MotorSpeeds>(uav, names::MOTOR_SPEEDS)
-                        .map_err(e)?,
-                ),
-                Some(
-                    w.add_channel::<MissionSetpoint>(uav, names::MISSION_SETPOINT)
-                        .map_err(e)?,
-                ),
-                Some(
-                    w.add_channel::<AttitudeSetpoint>(uav, names::ATTITUDE_SETPOINT)
-                        .map_err(e)?,
-                ),
-            ]);
+            let mut v = DroneChannels {
+                writer: &mut w,
+                uav,
+                handles: Vec::with_capacity(TOPICS),
+            };
+            visit_drone_topics(&mut v)?;
+            let mut row = [None; TOPICS];
+            for (slot, h) in row.iter_mut().zip(v.handles) {
+                *slot = Some(h);
+            }
+            channels.push(row);
         }
         let truth_channel = Some(
             w.add_channel::<PlantTruth>(names::PLANT, names::TRUTH)
@@ -166,6 +161,30 @@ impl FastRecording {
                 "{} samples not recorded; first: {e}",
                 self.write_errors
             )),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fast_topics_follow_the_recorder_order() {
+        let all = [
+            (FastTopic::RawAdc, names::RAW_ADC),
+            (FastTopic::Tension, names::TENSION),
+            (FastTopic::TensionEstimate, names::TENSION_ESTIMATE),
+            (FastTopic::TensionTruth, names::TENSION_TRUTH),
+            (FastTopic::VehicleState, names::VEHICLE_STATE),
+            (FastTopic::Imu, names::IMU),
+            (FastTopic::MotorSpeeds, names::MOTOR_SPEEDS),
+            (FastTopic::MissionSetpoint, names::MISSION_SETPOINT),
+            (FastTopic::AttitudeSetpoint, names::ATTITUDE_SETPOINT),
+        ];
+        assert_eq!(all.len(), TOPICS);
+        for (t, name) in all {
+            assert_eq!(DRONE_TOPICS[t.index()], name, "{t:?}");
         }
     }
 }

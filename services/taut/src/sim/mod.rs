@@ -76,39 +76,33 @@ pub enum Source {
     Truth,
 }
 
-/// The baseline choices of a run: `--law` and `--tension-source` over the drones' configs.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct BaselineOverrides {
-    pub law: Option<Law>,
-    pub tension_source: Option<Source>,
+/// Writes `--law` / `--tension-source` into a drone's config (so the effective config the sim
+/// writes carries them to the real-time services).
+pub fn apply_baselines(args: &SimArgs, cfg: &mut rt_config::Config) {
+    use rt_config::{ControllerLaw, TensionSource};
+    if let Some(l) = args.law {
+        cfg.controller.law = match l {
+            Law::Proposed => ControllerLaw::Proposed,
+            Law::Geometric => ControllerLaw::Geometric,
+        };
+    }
+    if let Some(s) = args.tension_source {
+        cfg.controller.tension_source = match s {
+            Source::Sensor => TensionSource::Sensor,
+            Source::Estimator => TensionSource::Estimator,
+            Source::Truth => TensionSource::Truth,
+        };
+    }
 }
 
-impl BaselineOverrides {
-    pub fn of(args: &SimArgs) -> Self {
-        Self {
-            law: args.law,
-            tension_source: args.tension_source,
-        }
-    }
-
-    /// Writes the choices into a drone's config (so the effective config the sim writes
-    /// carries them to the real-time services).
-    pub fn apply(&self, cfg: &mut rt_config::Config) {
-        use rt_config::{ControllerLaw, TensionSource};
-        if let Some(l) = self.law {
-            cfg.controller.law = match l {
-                Law::Proposed => ControllerLaw::Proposed,
-                Law::Geometric => ControllerLaw::Geometric,
-            };
-        }
-        if let Some(s) = self.tension_source {
-            cfg.controller.tension_source = match s {
-                Source::Sensor => TensionSource::Sensor,
-                Source::Estimator => TensionSource::Estimator,
-                Source::Truth => TensionSource::Truth,
-            };
-        }
-    }
+/// The law and tension source both drones fly with: the embedded config's, overridden.
+fn baselines(args: &SimArgs) -> (&'static str, &'static str) {
+    let mut cfg = rt_config::Config::embedded_sim();
+    apply_baselines(args, &mut cfg);
+    (
+        cfg.controller.law.as_str(),
+        cfg.controller.tension_source.as_str(),
+    )
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -146,21 +140,15 @@ pub fn fly(args: &SimArgs) -> Result<(Summary, PathBuf), String> {
     std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
     taut_ipc::install_stop_handler();
     if !args.quiet {
+        let (law, source) = baselines(args);
         println!(
             "[sim] {} seed {} ({}), noise {}, law {}, tension source {}, output in {}",
             scenario.name,
             args.seed,
             if args.fast { "fast" } else { "real time" },
             if args.no_noise { "off" } else { "on" },
-            args.law.map_or("from config", |l| match l {
-                Law::Proposed => "proposed",
-                Law::Geometric => "geometric",
-            }),
-            args.tension_source.map_or("from config", |s| match s {
-                Source::Sensor => "sensor",
-                Source::Estimator => "estimator",
-                Source::Truth => "truth",
-            }),
+            law,
+            source,
             out.display()
         );
     }
@@ -256,15 +244,14 @@ impl Outcome {
                 .is_none()
                 .then(|| "the scenario did not complete".to_string())
         });
-        let mut cfg = rt_config::Config::embedded_sim();
-        BaselineOverrides::of(args).apply(&mut cfg);
+        let (law, tension_source) = baselines(args);
         Summary {
             scenario: scenario.name.clone(),
             seed: args.seed,
             noise: !args.no_noise,
             mode,
-            law: cfg.controller.law.as_str(),
-            tension_source: cfg.controller.tension_source.as_str(),
+            law,
+            tension_source,
             success: failure.is_none(),
             failure,
             sim_s: self.sim_s,

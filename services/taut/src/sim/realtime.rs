@@ -32,7 +32,7 @@ pub fn run(args: &SimArgs, scenario: &Scenario, out: &Path) -> Result<Summary, S
     let scenario_arg = scenario_arg_for_children(&args.scenario);
     let cfgs = [0, 1].map(|k| {
         let mut c = drone_config(&scenario_arg, scenario, k, &run_id, &socket_dir, &ports);
-        super::BaselineOverrides::of(args).apply(&mut c);
+        super::apply_baselines(args, &mut c);
         if let Some(t) = args.controller_trigger {
             c.controller.trigger = match t {
                 super::Trigger::Odometry => rt_config::ControllerTrigger::Odometry,

@@ -12,7 +12,6 @@ use std::path::{Path, PathBuf};
 
 use clap::Parser;
 use recorder::Recording;
-use shared_types::names;
 pub use table::RunMetrics;
 
 use crate::sim::{self, summary::Summary, SimArgs};
@@ -190,22 +189,13 @@ fn draw_fig9(args: &StudyArgs) -> Result<(), String> {
     };
     let estimator = open("estimator")?;
     let sensor = open("sensor")?;
-    let uavs = sensor.uavs();
-    calibrate::plots::ensure_font(None);
+    let text = calibrate::plots::ensure_font(None).is_some();
     fig9::draw(
         &args.out.join("fig9.png"),
-        &uavs,
         &[
-            fig9::Column {
-                title: "Estimator".into(),
-                recording: &estimator,
-                topic: names::TENSION_ESTIMATE,
-            },
-            fig9::Column {
-                title: "Force sensor".into(),
-                recording: &sensor,
-                topic: names::TENSION,
-            },
+            (&estimator, fig9::Used::Estimator),
+            (&sensor, fig9::Used::Sensor),
         ],
+        text,
     )
 }
